@@ -1,0 +1,51 @@
+// `flume`: the thin command line over the solver, campaign, calibration and report modules.
+// Each subcommand lives in its module; this file only dispatches.
+#include <cstdio>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "flume_version.h"
+#include "solver/commands.h"
+
+namespace {
+
+struct Command {
+  const char* name;
+  int (*main)(int argc, char** argv);  // argv[0] is the subcommand name
+  const char* help;
+};
+
+const std::vector<Command>& commands() {
+  static const std::vector<Command> list = {
+      {"run", flume::run_main, "run SCENE.json --out DIR [--set path=value ...] [--threads N] [--backend cpu|cuda]"},
+      {"bench", flume::bench_main, "bench SCENE.json --steps N [--set path=value ...] [--threads N]"},
+      {"check", flume::check_main, "check SCENE.json [--set path=value ...]   validate a scene, print a summary"},
+  };
+  return list;
+}
+
+void usage(FILE* out) {
+  std::fprintf(out, "flume %s (%s): tsunami-debris flume simulation and uncertainty campaigns\n\nusage:\n",
+               FLUME_VERSION, FLUME_GIT_VERSION);
+  for (const auto& c : commands()) std::fprintf(out, "  flume %s\n", c.help);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h")) {
+    usage(argc < 2 ? stderr : stdout);
+    return argc < 2 ? 2 : 0;
+  }
+  if (!std::strcmp(argv[1], "--version")) {
+    std::printf("flume %s (%s)\n", FLUME_VERSION, FLUME_GIT_VERSION);
+    return 0;
+  }
+  for (const auto& c : commands()) {
+    if (std::string(argv[1]) == c.name) return c.main(argc - 1, argv + 1);
+  }
+  std::fprintf(stderr, "flume: unknown command '%s'\n", argv[1]);
+  usage(stderr);
+  return 2;
+}

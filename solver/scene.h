@@ -1,0 +1,113 @@
+// The scene: what a run simulates, parsed and validated once from JSON into plain structs.
+// No JSON type travels past scene.cpp. Frame: the last axis is vertical (z up in 3D, (x, z) in 2D).
+#pragma once
+#include <array>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace flume {
+
+enum class Precision { kFloat, kDouble };
+enum class BoundaryCondition { kSticky, kSlip, kSeparate };  // paper eq. 2
+enum class ShapeType { kBox, kHalfSpace };
+
+using Vec3d = std::array<double, 3>;  // 2D scenes use the first two entries (x, z); the third is 0.
+
+// An analytic solid. Box: the solid is [lo, hi]. Half-space: the solid is {x : (x - point) . normal < 0},
+// so `normal` points out of the solid into the fluid.
+struct Shape {
+  ShapeType type = ShapeType::kBox;
+  Vec3d lo{}, hi{};
+  Vec3d point{}, normal{};
+};
+
+struct Boundary {
+  std::string name;
+  Shape shape;
+  BoundaryCondition condition = BoundaryCondition::kSeparate;
+  double friction = 0.0;  // Coulomb coefficient for `separate`
+  Vec3d velocity{};       // boundary velocity v_b of eq. 2
+};
+
+// Water initially at rest, filling a box.
+struct WaterRegion {
+  Vec3d lo{}, hi{};
+};
+
+struct SolverSettings {
+  double dx = 0.01;
+  int ppc = 4;  // particles per cell per axis is ppc^(1/D) rounded: ppc must be a perfect power (2D: 1,4,9; 3D: 1,8,27)
+  double cfl = 0.4;
+  Precision precision = Precision::kDouble;
+  double end_time = 1.0;
+  double max_dt = 1e-3;  // s, an upper bound on the adaptive step
+  Vec3d gravity{};       // default: -9.80665 on the vertical axis
+};
+
+struct FluidSettings {
+  double density = 1000.0;       // kg/m^3
+  double bulk_modulus = 2.0e7;   // Pa
+  double gamma = 7.0;            // Tait/Murnaghan exponent
+  double viscosity = 1.0e-3;     // Pa s
+  double jbar_psi = 0.0;         // paper eqs. 3-4: 0 = plain MLS-MPM, 1 = fully grid-averaged J
+};
+
+struct Gauge {
+  std::string name;
+  Vec3d position{};      // horizontal position; the vertical entry is ignored
+  double rate_hz = 100;
+  double datum = 0.0;    // elevation is reported relative to this level (m)
+};
+struct Probe {
+  std::string name;
+  Vec3d position{};
+  double rate_hz = 100;
+};
+struct LoadCell {
+  std::string name;
+  std::string boundary;  // name of the boundary whose grid-node reaction is summed
+  double rate_hz = 1000;
+};
+
+struct Instruments {
+  std::vector<Gauge> gauges;
+  std::vector<Probe> probes;
+  std::vector<LoadCell> loads;
+  double diagnostics_rate_hz = 100;
+  double snapshot_rate_hz = 0;  // 0: no particle snapshots
+};
+
+struct Scene {
+  std::string file;  // where it was read from, for messages
+  std::string name;
+  int dimension = 3;
+  Vec3d domain_lo{}, domain_hi{};
+  BoundaryCondition domain_walls = BoundaryCondition::kSeparate;
+  double domain_wall_friction = 0.0;
+  SolverSettings solver;
+  FluidSettings fluid;
+  std::vector<WaterRegion> water;
+  std::vector<Boundary> boundaries;
+  Instruments instruments;
+};
+
+// A `--set path=value` override. The value is read as JSON where it parses as JSON, else as a string.
+struct Override {
+  std::string path;   // dotted; numeric segments index arrays ("water.0.hi")
+  std::string value;  // raw text from the command line
+};
+
+// Parses "path=value". Throws InputError when there is no '='.
+Override parse_override(const std::string& text);
+
+// Reads, overrides and validates a scene. Throws flume::InputError naming the file, the field path and
+// what is allowed. Unknown fields are errors (a typo in a campaign's parameter path must not pass silently).
+Scene load_scene(const std::string& file, const std::vector<Override>& overrides = {});
+Scene parse_scene_text(const std::string& json_text, const std::string& file_label,
+                       const std::vector<Override>& overrides = {});
+
+const char* to_string(BoundaryCondition c);
+const char* to_string(Precision p);
+
+}  // namespace flume
