@@ -174,7 +174,7 @@ std::vector<double> nice_ticks(double lo, double hi, int target) {
   return ticks;
 }
 
-std::pair<double, double> nice_limits(double lo, double hi, int target) {
+NiceAxis nice_axis(double lo, double hi, int target) {
   if (!finite(lo) || !finite(hi)) throw std::invalid_argument("plot: limits need finite data");
   if (hi < lo) std::swap(lo, hi);
   if (hi == lo) {
@@ -182,16 +182,16 @@ std::pair<double, double> nice_limits(double lo, double hi, int target) {
     lo -= pad;
     hi += pad;
   }
-  // Widening can change the step nice_ticks picks for the wider range; repeat until they agree, so that the
-  // limits are themselves ticks.
-  for (int iter = 0; iter < 8; ++iter) {
-    TickStep step = step_for(hi - lo, target);
-    double eps = step.value() * 1e-9;
-    double nlo = step.at(std::floor((lo + eps) / step.value())), nhi = step.at(std::ceil((hi - eps) / step.value()));
-    lo = nlo, hi = nhi;
-    if (step_for(hi - lo, target) == step) break;
-  }
-  return {lo + 0.0, hi + 0.0};
+  // The step is chosen for the data range and kept: recomputing it from the widened range could pick a
+  // coarser one whose ticks no longer land on the limits.
+  TickStep step = step_for(hi - lo, target);
+  double eps = step.value() * 1e-9;
+  NiceAxis out;
+  double k0 = std::floor((lo + eps) / step.value()), k1 = std::ceil((hi - eps) / step.value());
+  for (double k = k0; k <= k1; k += 1) out.ticks.push_back(step.at(k) + 0.0);
+  out.lo = out.ticks.front();
+  out.hi = out.ticks.back();
+  return out;
 }
 
 std::vector<double> log_ticks(double lo, double hi) {
@@ -338,6 +338,7 @@ struct AxisView {
   std::vector<double> ticks;  // data values
   std::vector<std::string> labels;
   std::vector<double> minor;  // data values, unlabelled
+  std::vector<double> auto_ticks;  // from nice_axis when the limits were chosen automatically
   double t(double v) const { return scale == Scale::kLog ? std::log10(v) : v; }
 };
 
@@ -614,7 +615,9 @@ AxisView resolve_axis(Scale scale, const Extent& ex, const std::optional<std::pa
   } else if (ex.empty()) {
     v.lo = 0, v.hi = 1;
   } else {
-    std::tie(v.lo, v.hi) = nice_limits(ex.lo, ex.hi, target);
+    NiceAxis a = nice_axis(ex.lo, ex.hi, target);
+    v.lo = a.lo, v.hi = a.hi;
+    v.auto_ticks = a.ticks;
   }
   return v;
 }
@@ -643,7 +646,7 @@ void fill_ticks(AxisView& v, int target) {
         }
     return;
   }
-  v.ticks = nice_ticks(v.lo, v.hi, target);
+  v.ticks = v.auto_ticks.empty() ? nice_ticks(v.lo, v.hi, target) : v.auto_ticks;
   double step = v.ticks.size() > 1 ? v.ticks[1] - v.ticks[0] : std::max(std::abs(v.lo), 1.0);
   for (double t : v.ticks) v.labels.push_back(format_tick(t, step));
 }

@@ -75,9 +75,13 @@ struct HeatmapStyle {
 
 // "Nice" tick positions: multiples of {1, 2, 2.5, 5} x 10^k inside [lo, hi], about `target` of them.
 std::vector<double> nice_ticks(double lo, double hi, int target = 5);
-// Axis limits widened outwards to whole tick steps so the ticks cover [data_lo, data_hi]; a degenerate range
-// is widened around its value. Returns {lo, hi}.
-std::pair<double, double> nice_limits(double data_lo, double data_hi, int target = 5);
+// Axis limits widened outwards to whole tick steps, and those ticks, so that they cover [data_lo, data_hi];
+// a degenerate range is widened around its value. ticks.front() == lo and ticks.back() == hi.
+struct NiceAxis {
+  double lo = 0, hi = 1;
+  std::vector<double> ticks;
+};
+NiceAxis nice_axis(double data_lo, double data_hi, int target = 5);
 // Ticks of a log axis over [lo, hi] (both > 0): decades, with 2 and 5 added when there are under two decades.
 std::vector<double> log_ticks(double lo, double hi);
 // Escapes text for XML/HTML content and attribute values (& < > " '); drops characters XML 1.0 forbids and

@@ -60,11 +60,12 @@ TEST(Ticks, NiceNumbersCoveringTheData) {
   };
   for (Case c : {Case{0, 1}, Case{0.013, 0.987}, Case{-3.7, 12.2}, Case{101.3, 101.9}, Case{-1e-6, 3e-6},
                  Case{0, 7.3e5}, Case{5, 5}, Case{0, 0}, Case{-250, -3}}) {
-    auto [lo, hi] = nice_limits(c.lo, c.hi);
+    NiceAxis axis = nice_axis(c.lo, c.hi);
+    double lo = axis.lo, hi = axis.hi;
     EXPECT_LE(lo, c.lo) << c.lo << " " << c.hi;
     EXPECT_GE(hi, c.hi) << c.lo << " " << c.hi;
     EXPECT_LT(lo, hi);
-    std::vector<double> t = nice_ticks(lo, hi);
+    const std::vector<double>& t = axis.ticks;
     ASSERT_GE(t.size(), 3u) << c.lo << " " << c.hi;
     EXPECT_LE(t.size(), 11u);
     double step = t[1] - t[0];
@@ -76,6 +77,9 @@ TEST(Ticks, NiceNumbersCoveringTheData) {
     for (double v : t) EXPECT_NEAR(v / step, std::round(v / step), 1e-6);
   }
   EXPECT_EQ(nice_ticks(0, 1), (std::vector<double>{0, 0.2, 0.4, 0.6, 0.8, 1.0}));
+  // Not widened further than one step beyond the data on either side.
+  NiceAxis a = nice_axis(-1.2, 1.2);
+  EXPECT_EQ(a.ticks, (std::vector<double>{-1.5, -1, -0.5, 0, 0.5, 1, 1.5}));
   EXPECT_EQ(nice_ticks(-10, 10, 4), (std::vector<double>{-10, -5, 0, 5, 10}));
 }
 
