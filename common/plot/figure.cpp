@@ -23,7 +23,8 @@ std::string Color::hex() const {
 }
 
 Color palette(std::size_t i) {
-  // Okabe & Ito, "Color Universal Design" (2008); yellow and black last (weak on white, and black is for text).
+  // Okabe & Ito, "Color Universal Design" (2008); yellow and black last (weak on white, and black is for
+  // text).
   static const std::array<Color, 8> colors{{{0, 114, 178},
                                             {230, 159, 0},
                                             {0, 158, 115},
@@ -67,11 +68,21 @@ std::string xml_escape(std::string_view s) {
     unsigned char c = p[i];
     if (c < 0x80) {
       switch (c) {
-        case '&': out += "&amp;"; break;
-        case '<': out += "&lt;"; break;
-        case '>': out += "&gt;"; break;
-        case '"': out += "&quot;"; break;
-        case '\'': out += "&apos;"; break;
+        case '&':
+          out += "&amp;";
+          break;
+        case '<':
+          out += "&lt;";
+          break;
+        case '>':
+          out += "&gt;";
+          break;
+        case '"':
+          out += "&quot;";
+          break;
+        case '\'':
+          out += "&apos;";
+          break;
         default:
           // XML 1.0 allows no control characters but tab, newline and carriage return.
           if (c >= 0x20 || c == '\t' || c == '\n' || c == '\r') out += static_cast<char>(c);
@@ -80,7 +91,10 @@ std::string xml_escape(std::string_view s) {
       continue;
     }
     // Multi-byte UTF-8: copy a well-formed sequence, replace anything else by U+FFFD.
-    std::size_t len = (c >= 0xC2 && c <= 0xDF) ? 2 : (c >= 0xE0 && c <= 0xEF) ? 3 : (c >= 0xF0 && c <= 0xF4) ? 4 : 0;
+    std::size_t len = (c >= 0xC2 && c <= 0xDF)   ? 2
+                      : (c >= 0xE0 && c <= 0xEF) ? 3
+                      : (c >= 0xF0 && c <= 0xF4) ? 4
+                                                 : 0;
     bool ok = len > 0 && i + len <= n;
     for (std::size_t k = 1; ok && k < len; ++k) ok = (p[i + k] & 0xC0) == 0x80;
     if (ok && len == 3) {
@@ -114,8 +128,8 @@ std::string num(double v) {
 
 bool finite(double v) { return std::isfinite(v); }
 
-// A tick step m x 10^e with m in {1, 2, 2.5, 5}; kept apart so that ticks are computed as (k m) / 10^-e, which
-// rounds to the double nearest the decimal value (0.6, not 3 x 0.2 = 0.6000000000000001).
+// A tick step m x 10^e with m in {1, 2, 2.5, 5}; kept apart so that ticks are computed as (k m) / 10^-e,
+// which rounds to the double nearest the decimal value (0.6, not 3 x 0.2 = 0.6000000000000001).
 struct TickStep {
   double m;
   int e;
@@ -170,7 +184,8 @@ std::vector<double> nice_ticks(double lo, double hi, int target) {
   TickStep step = step_for(hi - lo, target);
   double eps = step.value() * 1e-9;
   std::vector<double> ticks;
-  for (double k = std::ceil((lo - eps) / step.value()); step.at(k) <= hi + eps; k += 1) ticks.push_back(step.at(k) + 0.0);
+  for (double k = std::ceil((lo - eps) / step.value()); step.at(k) <= hi + eps; k += 1)
+    ticks.push_back(step.at(k) + 0.0);
   return ticks;
 }
 
@@ -270,16 +285,20 @@ const Color kGrey{102, 102, 102};
 
 void require_same_size(const char* what, std::size_t a, std::size_t b) {
   if (a != b)
-    throw std::invalid_argument(std::string("plot: ") + what + ": sizes differ (" + std::to_string(a) + " vs " +
-                                std::to_string(b) + ")");
+    throw std::invalid_argument(std::string("plot: ") + what + ": sizes differ (" + std::to_string(a) +
+                                " vs " + std::to_string(b) + ")");
 }
 
 std::string dasharray(Dash d, double width) {
   switch (d) {
-    case Dash::kSolid: return "";
-    case Dash::kDashed: return num(4 * width) + " " + num(2.5 * width);
-    case Dash::kDotted: return num(1 * width) + " " + num(2 * width);
-    case Dash::kDashDot: return num(4 * width) + " " + num(2 * width) + " " + num(1 * width) + " " + num(2 * width);
+    case Dash::kSolid:
+      return "";
+    case Dash::kDashed:
+      return num(4 * width) + " " + num(2.5 * width);
+    case Dash::kDotted:
+      return num(1 * width) + " " + num(2 * width);
+    case Dash::kDashDot:
+      return num(4 * width) + " " + num(2 * width) + " " + num(1 * width) + " " + num(2 * width);
   }
   return "";
 }
@@ -317,11 +336,11 @@ std::string marker_svg(Marker m, double x, double y, double size) {
       return "<path d=\"M" + num(x) + " " + num(y - r) + "L" + num(x + r) + " " + num(y + r * 0.8) + "L" +
              num(x - r) + " " + num(y + r * 0.8) + "Z\"/>";
     case Marker::kDiamond:
-      return "<path d=\"M" + num(x) + " " + num(y - r) + "L" + num(x + r) + " " + num(y) + "L" + num(x) + " " +
-             num(y + r) + "L" + num(x - r) + " " + num(y) + "Z\"/>";
+      return "<path d=\"M" + num(x) + " " + num(y - r) + "L" + num(x + r) + " " + num(y) + "L" + num(x) +
+             " " + num(y + r) + "L" + num(x - r) + " " + num(y) + "Z\"/>";
     case Marker::kCross:
-      return "<path fill=\"none\" d=\"M" + num(x - r) + " " + num(y - r) + "L" + num(x + r) + " " + num(y + r) +
-             "M" + num(x - r) + " " + num(y + r) + "L" + num(x + r) + " " + num(y - r) + "\"/>";
+      return "<path fill=\"none\" d=\"M" + num(x - r) + " " + num(y - r) + "L" + num(x + r) + " " +
+             num(y + r) + "M" + num(x - r) + " " + num(y + r) + "L" + num(x + r) + " " + num(y - r) + "\"/>";
     case Marker::kPlus:
       return "<path fill=\"none\" d=\"M" + num(x - r) + " " + num(y) + "L" + num(x + r) + " " + num(y) + "M" +
              num(x) + " " + num(y - r) + "L" + num(x) + " " + num(y + r) + "\"/>";
@@ -334,10 +353,10 @@ bool stroked_marker(Marker m) { return m == Marker::kCross || m == Marker::kPlus
 // A resolved axis: limits in transformed space (log10 for log axes) and the ticks to draw.
 struct AxisView {
   Scale scale = Scale::kLinear;
-  double lo = 0, hi = 1;  // transformed
+  double lo = 0, hi = 1;      // transformed
   std::vector<double> ticks;  // data values
   std::vector<std::string> labels;
-  std::vector<double> minor;  // data values, unlabelled
+  std::vector<double> minor;       // data values, unlabelled
   std::vector<double> auto_ticks;  // from nice_axis when the limits were chosen automatically
   double t(double v) const { return scale == Scale::kLog ? std::log10(v) : v; }
 };
@@ -390,12 +409,14 @@ Axes& Axes::yscale(Scale s) {
   return *this;
 }
 Axes& Axes::xlim(double lo, double hi) {
-  if (!finite(lo) || !finite(hi) || !(lo < hi)) throw std::invalid_argument("plot: xlim needs finite lo < hi");
+  if (!finite(lo) || !finite(hi) || !(lo < hi))
+    throw std::invalid_argument("plot: xlim needs finite lo < hi");
   s_->xlim = {lo, hi};
   return *this;
 }
 Axes& Axes::ylim(double lo, double hi) {
-  if (!finite(lo) || !finite(hi) || !(lo < hi)) throw std::invalid_argument("plot: ylim needs finite lo < hi");
+  if (!finite(lo) || !finite(hi) || !(lo < hi))
+    throw std::invalid_argument("plot: ylim needs finite lo < hi");
   s_->ylim = {lo, hi};
   return *this;
 }
@@ -424,25 +445,28 @@ Axes& Axes::scatter(const std::vector<double>& x, const std::vector<double>& y, 
   return *this;
 }
 
-Axes& Axes::step(const std::vector<double>& x, const std::vector<double>& y, const LineStyle& style, Step where) {
+Axes& Axes::step(const std::vector<double>& x, const std::vector<double>& y, const LineStyle& style,
+                 Step where) {
   require_same_size("step x/y", x.size(), y.size());
-  s_->artists.emplace_back(
-      LineArtist{x, y, style, s_->pick(style.color), where == Step::kPre ? LineKind::kStepPre : LineKind::kStepPost});
+  s_->artists.emplace_back(LineArtist{x, y, style, s_->pick(style.color),
+                                      where == Step::kPre ? LineKind::kStepPre : LineKind::kStepPost});
   return *this;
 }
 
-Axes& Axes::band(const std::vector<double>& x, const std::vector<double>& lower, const std::vector<double>& upper,
-                 const FillStyle& style) {
+Axes& Axes::band(const std::vector<double>& x, const std::vector<double>& lower,
+                 const std::vector<double>& upper, const FillStyle& style) {
   require_same_size("band x/lower", x.size(), lower.size());
   require_same_size("band x/upper", x.size(), upper.size());
   s_->artists.emplace_back(BandArtist{x, lower, upper, style, s_->pick(style.color)});
   return *this;
 }
 
-Axes& Axes::bars(const std::vector<double>& edges, const std::vector<double>& heights, const FillStyle& style) {
+Axes& Axes::bars(const std::vector<double>& edges, const std::vector<double>& heights,
+                 const FillStyle& style) {
   if (edges.size() != heights.size() + 1)
-    throw std::invalid_argument("plot: bars need one more edge than heights (" + std::to_string(edges.size()) +
-                                " edges, " + std::to_string(heights.size()) + " heights)");
+    throw std::invalid_argument("plot: bars need one more edge than heights (" +
+                                std::to_string(edges.size()) + " edges, " + std::to_string(heights.size()) +
+                                " heights)");
   FillStyle s = style;
   if (s.opacity == FillStyle{}.opacity) s.opacity = 0.8;  // bars read better nearly opaque
   s_->artists.emplace_back(BarsArtist{edges, heights, s, s_->pick(style.color)});
@@ -539,7 +563,9 @@ struct Extent {
   bool empty() const { return lo > hi; }
 };
 
-std::string axis_title(const Axes::State& s) { return s.title.empty() ? std::string() : " '" + s.title + "'"; }
+std::string axis_title(const Axes::State& s) {
+  return s.title.empty() ? std::string() : " '" + s.title + "'";
+}
 
 // Data extents of every artist; on log axes a non-positive value is an error (it has no position).
 void data_extents(const Axes::State& s, Extent& ex, Extent& ey) {
@@ -667,21 +693,42 @@ std::string text_svg(double x, double y, const std::string& content_svg, double 
 
 const char* anchor_name(Anchor a) {
   switch (a) {
-    case Anchor::kStart: return "start";
-    case Anchor::kMiddle: return "middle";
-    case Anchor::kEnd: return "end";
+    case Anchor::kStart:
+      return "start";
+    case Anchor::kMiddle:
+      return "middle";
+    case Anchor::kEnd:
+      return "end";
   }
   return "start";
 }
 
 struct LegendEntry {
+  enum Kind { kLine, kMarker, kPatch };
   std::string label;
-  enum { kLine, kMarker, kPatch } kind;
+  Kind kind = kLine;
   Color color;
   LineStyle line;
   MarkerStyle marker;
   FillStyle fill;
 };
+
+// Built field by field: brace-initialising the nested styles trips GCC 12's -Wmaybe-uninitialized.
+LegendEntry legend_entry(const LineStyle& l, const Color& c) {
+  LegendEntry e;
+  e.label = l.label, e.kind = LegendEntry::kLine, e.color = c, e.line = l;
+  return e;
+}
+LegendEntry legend_entry(const MarkerStyle& m, const Color& c) {
+  LegendEntry e;
+  e.label = m.label, e.kind = LegendEntry::kMarker, e.color = c, e.marker = m;
+  return e;
+}
+LegendEntry legend_entry(const FillStyle& f, const Color& c) {
+  LegendEntry e;
+  e.label = f.label, e.kind = LegendEntry::kPatch, e.color = c, e.fill = f;
+  return e;
+}
 
 // Draws one axes panel into the cell (cx, cy, cw, ch). `id` makes the clip path's id unique in the figure.
 void render_axes(const Axes::State& s, double cx, double cy, double cw, double ch, const std::string& id,
@@ -725,7 +772,8 @@ void render_axes(const Axes::State& s, double cx, double cy, double cw, double c
   auto X = [&](double v) { return px + (xv.t(v) - xv.lo) / (xv.hi - xv.lo) * pw; };
   auto Y = [&](double v) { return py + ph - (yv.t(v) - yv.lo) / (yv.hi - yv.lo) * ph; };
   auto ok = [&](double x, double y) {
-    return finite(x) && finite(y) && (s.xscale == Scale::kLinear || x > 0) && (s.yscale == Scale::kLinear || y > 0);
+    return finite(x) && finite(y) && (s.xscale == Scale::kLinear || x > 0) &&
+           (s.yscale == Scale::kLinear || y > 0);
   };
 
   out += "<g class=\"axes\">\n";
@@ -748,7 +796,8 @@ void render_axes(const Axes::State& s, double cx, double cy, double cw, double c
   }
   for (double t : xv.minor) ticks += "M" + num(X(t)) + " " + num(py + ph) + "v3";
   for (double t : yv.minor) ticks += "M" + num(px) + " " + num(Y(t)) + "h-3";
-  if (!grid.empty()) out += "<path d=\"" + grid + "\" stroke=\"#e5e5e5\" stroke-width=\"1\" fill=\"none\"/>\n";
+  if (!grid.empty())
+    out += "<path d=\"" + grid + "\" stroke=\"#e5e5e5\" stroke-width=\"1\" fill=\"none\"/>\n";
 
   // Artists, clipped to the plot area.
   std::vector<LegendEntry> legend;
@@ -775,18 +824,18 @@ void render_axes(const Axes::State& s, double cx, double cy, double cw, double c
         pen = true;
       }
       if (!d.empty()) out += "<path d=\"" + d + "\"" + stroke_attrs(l->style, l->color) + "/>\n";
-      if (!l->style.label.empty()) legend.push_back({l->style.label, LegendEntry::kLine, l->color, l->style, {}, {}});
+      if (!l->style.label.empty()) legend.push_back(legend_entry(l->style, l->color));
     } else if (auto* p = std::get_if<ScatterArtist>(&a)) {
       bool stroked = stroked_marker(p->style.marker);
-      out += "<g" + std::string(stroked ? " fill=\"none\" stroke=\"" + p->color.hex() + "\" stroke-width=\"1.5\""
-                                        : " fill=\"" + p->color.hex() + "\" stroke=\"none\"");
+      out +=
+          "<g" + std::string(stroked ? " fill=\"none\" stroke=\"" + p->color.hex() + "\" stroke-width=\"1.5\""
+                                     : " fill=\"" + p->color.hex() + "\" stroke=\"none\"");
       if (p->style.opacity < 1) out += " opacity=\"" + num(p->style.opacity) + "\"";
       out += ">";
       for (std::size_t i = 0; i < p->x.size(); ++i)
         if (ok(p->x[i], p->y[i])) out += marker_svg(p->style.marker, X(p->x[i]), Y(p->y[i]), p->style.size);
       out += "</g>\n";
-      if (!p->style.label.empty())
-        legend.push_back({p->style.label, LegendEntry::kMarker, p->color, {}, p->style, {}});
+      if (!p->style.label.empty()) legend.push_back(legend_entry(p->style, p->color));
     } else if (auto* b = std::get_if<BandArtist>(&a)) {
       // One closed polygon per run of finite samples: upper edge forwards, lower edge back.
       std::string d;
@@ -796,14 +845,15 @@ void render_axes(const Axes::State& s, double cx, double cy, double cw, double c
         std::size_t j = i;
         while (j < n && ok(b->x[j], b->lo[j]) && ok(b->x[j], b->hi[j])) ++j;
         if (j > i) {
-          for (std::size_t k = i; k < j; ++k) d += (k == i ? "M" : "L") + num(X(b->x[k])) + " " + num(Y(b->hi[k]));
+          for (std::size_t k = i; k < j; ++k)
+            d += (k == i ? "M" : "L") + num(X(b->x[k])) + " " + num(Y(b->hi[k]));
           for (std::size_t k = j; k-- > i;) d += "L" + num(X(b->x[k])) + " " + num(Y(b->lo[k]));
           d += "Z";
         }
         i = j;
       }
       if (!d.empty()) out += "<path d=\"" + d + "\"" + fill_attrs(b->style, b->color) + "/>\n";
-      if (!b->style.label.empty()) legend.push_back({b->style.label, LegendEntry::kPatch, b->color, {}, {}, b->style});
+      if (!b->style.label.empty()) legend.push_back(legend_entry(b->style, b->color));
     } else if (auto* h = std::get_if<BarsArtist>(&a)) {
       out += "<g" + fill_attrs(h->style, h->color) + ">";
       double base = s.yscale == Scale::kLog ? py + ph : Y(0.0);
@@ -811,23 +861,23 @@ void render_axes(const Axes::State& s, double cx, double cy, double cw, double c
         double x0 = h->edges[i], x1 = h->edges[i + 1], v = h->heights[i];
         if (!ok(x0, v) || !ok(x1, v) || (s.yscale == Scale::kLog && v <= 0)) continue;
         double a0 = X(std::min(x0, x1)), a1 = X(std::max(x0, x1)), top_y = Y(v);
-        out += "<rect x=\"" + num(a0) + "\" y=\"" + num(std::min(top_y, base)) + "\" width=\"" + num(a1 - a0) +
-               "\" height=\"" + num(std::abs(base - top_y)) + "\"/>";
+        out += "<rect x=\"" + num(a0) + "\" y=\"" + num(std::min(top_y, base)) + "\" width=\"" +
+               num(a1 - a0) + "\" height=\"" + num(std::abs(base - top_y)) + "\"/>";
       }
       out += "</g>\n";
-      if (!h->style.label.empty()) legend.push_back({h->style.label, LegendEntry::kPatch, h->color, {}, {}, h->style});
+      if (!h->style.label.empty()) legend.push_back(legend_entry(h->style, h->color));
     } else if (auto* r = std::get_if<RefLineArtist>(&a)) {
       if (!finite(r->value)) continue;
       std::string d = r->horizontal ? "M" + num(px) + " " + num(Y(r->value)) + "H" + num(px + pw)
                                     : "M" + num(X(r->value)) + " " + num(py) + "V" + num(py + ph);
       out += "<path d=\"" + d + "\"" + stroke_attrs(r->style, r->color) + "/>\n";
-      if (!r->style.label.empty()) legend.push_back({r->style.label, LegendEntry::kLine, r->color, r->style, {}, {}});
+      if (!r->style.label.empty()) legend.push_back(legend_entry(r->style, r->color));
     } else if (auto* g = std::get_if<PolygonArtist>(&a)) {
       std::string d;
       for (std::size_t i = 0; i < g->x.size(); ++i)
         if (ok(g->x[i], g->y[i])) d += (d.empty() ? "M" : "L") + num(X(g->x[i])) + " " + num(Y(g->y[i]));
       if (!d.empty()) out += "<path d=\"" + d + "Z\"" + fill_attrs(g->style, g->color) + "/>\n";
-      if (!g->style.label.empty()) legend.push_back({g->style.label, LegendEntry::kPatch, g->color, {}, {}, g->style});
+      if (!g->style.label.empty()) legend.push_back(legend_entry(g->style, g->color));
     } else if (auto* m = std::get_if<HeatmapArtist>(&a)) {
       // crispEdges: no hairline seams between neighbouring cells.
       out += "<g shape-rendering=\"crispEdges\" stroke=\"none\">";
@@ -865,7 +915,8 @@ void render_axes(const Axes::State& s, double cx, double cy, double cw, double c
   // Frame, ticks and tick labels.
   out += "<rect x=\"" + num(px) + "\" y=\"" + num(py) + "\" width=\"" + num(pw) + "\" height=\"" + num(ph) +
          "\" fill=\"none\" stroke=\"#333333\" stroke-width=\"1\"/>\n";
-  if (!ticks.empty()) out += "<path d=\"" + ticks + "\" stroke=\"#333333\" stroke-width=\"1\" fill=\"none\"/>\n";
+  if (!ticks.empty())
+    out += "<path d=\"" + ticks + "\" stroke=\"#333333\" stroke-width=\"1\" fill=\"none\"/>\n";
   for (std::size_t i = 0; i < xv.ticks.size(); ++i)
     out += text_svg(X(xv.ticks[i]), py + ph + 8 + tick_fs, label_svg(xv.labels[i]), tick_fs, "middle");
   for (std::size_t i = 0; i < yv.ticks.size(); ++i)
@@ -873,7 +924,8 @@ void render_axes(const Axes::State& s, double cx, double cy, double cw, double c
   if (!s.title.empty())
     out += text_svg(px + pw / 2, py - 8, xml_escape(s.title), title_fs, "middle", " font-weight=\"bold\"");
   if (!s.xlabel.empty())
-    out += text_svg(px + pw / 2, py + ph + 8 + tick_fs + 6 + label_fs, xml_escape(s.xlabel), label_fs, "middle");
+    out +=
+        text_svg(px + pw / 2, py + ph + 8 + tick_fs + 6 + label_fs, xml_escape(s.xlabel), label_fs, "middle");
   if (!s.ylabel.empty()) {
     double lx = cx + 8 + label_fs, ly = py + ph / 2;
     out += text_svg(lx, ly, xml_escape(s.ylabel), label_fs, "middle",
@@ -889,8 +941,8 @@ void render_axes(const Axes::State& s, double cx, double cy, double cw, double c
       out += "<rect x=\"" + num(bx) + "\" y=\"" + num(y0) + "\" width=\"" + num(bw) + "\" height=\"" +
              num(ph / steps + 0.5) + "\" fill=\"" + viridis((k + 0.5) / steps).hex() + "\"/>";
     }
-    out += "</g>\n<rect x=\"" + num(bx) + "\" y=\"" + num(py) + "\" width=\"" + num(bw) + "\" height=\"" + num(ph) +
-           "\" fill=\"none\" stroke=\"#333333\"/>\n";
+    out += "</g>\n<rect x=\"" + num(bx) + "\" y=\"" + num(py) + "\" width=\"" + num(bw) + "\" height=\"" +
+           num(ph) + "\" fill=\"none\" stroke=\"#333333\"/>\n";
     AxisView cv;
     cv.lo = colorbar->vmin, cv.hi = colorbar->vmax;
     fill_ticks(cv, 5);
@@ -924,12 +976,13 @@ void render_axes(const Axes::State& s, double cx, double cy, double cw, double c
       const LegendEntry& e = legend[i];
       double yc = ly + pad + row * i + row / 2 - 2, sx = lx + pad;
       if (e.kind == LegendEntry::kLine) {
-        out += "<path d=\"M" + num(sx) + " " + num(yc) + "h" + num(swatch) + "\"" + stroke_attrs(e.line, e.color) +
-               "/>\n";
+        out += "<path d=\"M" + num(sx) + " " + num(yc) + "h" + num(swatch) + "\"" +
+               stroke_attrs(e.line, e.color) + "/>\n";
       } else if (e.kind == LegendEntry::kMarker) {
         bool stroked = stroked_marker(e.marker.marker);
-        out += "<g" + std::string(stroked ? " fill=\"none\" stroke=\"" + e.color.hex() + "\" stroke-width=\"1.5\""
-                                          : " fill=\"" + e.color.hex() + "\"") +
+        out += "<g" +
+               std::string(stroked ? " fill=\"none\" stroke=\"" + e.color.hex() + "\" stroke-width=\"1.5\""
+                                   : " fill=\"" + e.color.hex() + "\"") +
                ">" + marker_svg(e.marker.marker, sx + swatch / 2, yc, e.marker.size) + "</g>\n";
       } else {
         out += "<rect x=\"" + num(sx) + "\" y=\"" + num(yc - 5) + "\" width=\"" + num(swatch) +

@@ -115,9 +115,11 @@ class Axes {
              const FillStyle& style = {});
   // Bars over [edges[i], edges[i+1]] of height heights[i] (edges.size() == heights.size() + 1). On a log y
   // axis empty bars are left out and the others start at the bottom of the axis.
-  Axes& bars(const std::vector<double>& edges, const std::vector<double>& heights, const FillStyle& style = {});
+  Axes& bars(const std::vector<double>& edges, const std::vector<double>& heights,
+             const FillStyle& style = {});
   // Equal-width bins over the finite range of `samples`; density=true scales the area to 1.
-  Axes& histogram(const std::vector<double>& samples, int bins, const FillStyle& style = {}, bool density = false);
+  Axes& histogram(const std::vector<double>& samples, int bins, const FillStyle& style = {},
+                  bool density = false);
   Axes& hline(double y, const LineStyle& style = {});
   Axes& vline(double x, const LineStyle& style = {});
   Axes& rect(double x0, double y0, double x1, double y1, const FillStyle& style = {});

@@ -111,12 +111,23 @@ std::string xml_escape(const std::string& s) {
   std::string out;
   for (char c : s) {
     switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      case '\'': out += "&apos;"; break;
-      default: out += c;
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      case '\'':
+        out += "&apos;";
+        break;
+      default:
+        out += c;
     }
   }
   return out;
@@ -209,8 +220,8 @@ struct RunFile::Impl {
   }
 
   // Replaces attribute `name` on `group_path` with a scalar of `file_type`.
-  void write_attribute(const std::string& group_path, const std::string& name, hid_t file_type, hid_t mem_type,
-                       const void* value) {
+  void write_attribute(const std::string& group_path, const std::string& name, hid_t file_type,
+                       hid_t mem_type, const void* value) {
     require_open();
     check_name(path, name);
     QuietErrors quiet;
@@ -331,7 +342,8 @@ void RunFile::write_matrix(const std::string& group_path, const std::string& nam
                        row_major.data(), false);
 }
 
-void RunFile::set_attribute(const std::string& group_path, const std::string& name, const std::string& value) {
+void RunFile::set_attribute(const std::string& group_path, const std::string& name,
+                            const std::string& value) {
   // Fixed-length, null-padded UTF-8: the string form h5py, h5dump and ParaView's readers all take.
   Id type(H5Tcopy(H5T_C_S1), H5Tclose);
   if (!type.valid() || H5Tset_size(type.get(), std::max<std::size_t>(value.size(), 1)) < 0 ||
@@ -353,19 +365,22 @@ void RunFile::set_attribute(const std::string& group_path, const std::string& na
   impl_->write_attribute(group_path, name, H5T_STD_I64LE, H5T_NATIVE_INT64, &value);
 }
 
-std::size_t RunFile::add_snapshot(double time, std::size_t n, const float* xyz, const std::vector<Field>& scalars,
-                                  const std::vector<Field>& vectors) {
+std::size_t RunFile::add_snapshot(double time, std::size_t n, const float* xyz,
+                                  const std::vector<Field>& scalars, const std::vector<Field>& vectors) {
   impl_->require_open();
   const std::string& file = impl_->path;
-  if (n > 0 && !xyz) throw std::invalid_argument(file + ": snapshot with " + std::to_string(n) + " particles and no xyz");
+  if (n > 0 && !xyz)
+    throw std::invalid_argument(file + ": snapshot with " + std::to_string(n) + " particles and no xyz");
   std::vector<std::string> seen{"xyz"};
   for (const auto* list : {&scalars, &vectors}) {
     for (const Field& f : *list) {
       check_name(file, f.name);
       for (const std::string& s : seen)
-        if (s == f.name) throw std::invalid_argument(file + ": snapshot field '" + f.name + "' given twice or reserved");
+        if (s == f.name)
+          throw std::invalid_argument(file + ": snapshot field '" + f.name + "' given twice or reserved");
       seen.push_back(f.name);
-      if (n > 0 && !f.data) throw std::invalid_argument(file + ": snapshot field '" + f.name + "' has no data");
+      if (n > 0 && !f.data)
+        throw std::invalid_argument(file + ": snapshot field '" + f.name + "' has no data");
     }
   }
 
@@ -376,7 +391,8 @@ std::size_t RunFile::add_snapshot(double time, std::size_t n, const float* xyz, 
   auto write = [&](const std::string& name, const float* data, hsize_t cols) {
     std::vector<hsize_t> dims{static_cast<hsize_t>(n)};
     if (cols > 1) dims.push_back(cols);
-    impl_->write_dataset(g.get(), base + "/" + name, name, H5T_IEEE_F32LE, H5T_NATIVE_FLOAT, dims, data, true);
+    impl_->write_dataset(g.get(), base + "/" + name, name, H5T_IEEE_F32LE, H5T_NATIVE_FLOAT, dims, data,
+                         true);
   };
   write("xyz", xyz, 3);
   for (const Field& f : scalars) {
@@ -450,7 +466,8 @@ std::vector<double> Reader::read_vector(const std::string& dataset_path) const {
   if (!dset.valid()) fail(file_, "cannot open dataset " + dataset_path);
   Id type(H5Dget_type(dset.get()), H5Tclose);
   H5T_class_t cls = H5Tget_class(type.get());
-  if (cls != H5T_FLOAT && cls != H5T_INTEGER) throw std::runtime_error(file_ + ": " + dataset_path + " is not numeric");
+  if (cls != H5T_FLOAT && cls != H5T_INTEGER)
+    throw std::runtime_error(file_ + ": " + dataset_path + " is not numeric");
   Id space(H5Dget_space(dset.get()), H5Sclose);
   hssize_t count = H5Sget_simple_extent_npoints(space.get());
   if (count < 0) fail(file_, "cannot read the shape of " + dataset_path);
@@ -495,7 +512,8 @@ std::string Reader::string_attribute(const std::string& object_path, const std::
   Id attr(H5Aopen_by_name(id_, object_path.c_str(), name.c_str(), H5P_DEFAULT, H5P_DEFAULT), H5Aclose);
   if (!attr.valid()) fail(file_, "cannot open attribute " + where);
   Id type(H5Aget_type(attr.get()), H5Tclose);
-  if (H5Tget_class(type.get()) != H5T_STRING) throw std::runtime_error(file_ + ": " + where + " is not a string");
+  if (H5Tget_class(type.get()) != H5T_STRING)
+    throw std::runtime_error(file_ + ": " + where + " is not a string");
   if (H5Tis_variable_str(type.get()) > 0) {
     Id mem(H5Tcopy(H5T_C_S1), H5Tclose);
     H5Tset_size(mem.get(), H5T_VARIABLE);
@@ -517,7 +535,8 @@ double Reader::number_attribute(const std::string& object_path, const std::strin
   if (!attr.valid()) fail(file_, "cannot open attribute " + where);
   Id type(H5Aget_type(attr.get()), H5Tclose);
   H5T_class_t cls = H5Tget_class(type.get());
-  if (cls != H5T_FLOAT && cls != H5T_INTEGER) throw std::runtime_error(file_ + ": " + where + " is not a number");
+  if (cls != H5T_FLOAT && cls != H5T_INTEGER)
+    throw std::runtime_error(file_ + ": " + where + " is not a number");
   Id space(H5Aget_space(attr.get()), H5Sclose);
   if (H5Sget_simple_extent_npoints(space.get()) != 1)
     throw std::runtime_error(file_ + ": " + where + " is not a single number");

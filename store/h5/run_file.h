@@ -42,10 +42,11 @@ class RunFile {
 
   // A 1-D float64 dataset `<group_path>/<name>`; groups are created as needed. A dataset of that name
   // must not exist yet (series are written once, at the end of a run or when it stops).
-  void write_series(const std::string& group_path, const std::string& name, const std::vector<double>& values);
+  void write_series(const std::string& group_path, const std::string& name,
+                    const std::vector<double>& values);
   // A 2-D float64 dataset of shape (row_major.size() / cols) x cols.
-  void write_matrix(const std::string& group_path, const std::string& name, const std::vector<double>& row_major,
-                    std::size_t cols);
+  void write_matrix(const std::string& group_path, const std::string& name,
+                    const std::vector<double>& row_major, std::size_t cols);
 
   // Attributes on a group ("/" is the root; the group is created if missing). Setting one again replaces it,
   // so `status` can go from "running" to "complete" or "unstable".
@@ -59,8 +60,8 @@ class RunFile {
 
   // Appends /snapshots/<index, 5 digits>/ with xyz (n x 3), each scalar field (n) and vector field (n x 3),
   // all float32, deflate-compressed when the HDF5 build has it. Returns the snapshot's index.
-  std::size_t add_snapshot(double time, std::size_t n, const float* xyz, const std::vector<Field>& scalars = {},
-                           const std::vector<Field>& vectors = {});
+  std::size_t add_snapshot(double time, std::size_t n, const float* xyz,
+                           const std::vector<Field>& scalars = {}, const std::vector<Field>& vectors = {});
   std::size_t snapshot_count() const;
 
   // Pushes buffered data to the `.part` file (it stays `.part`).

@@ -125,7 +125,8 @@ TEST(Figure, NaNBreaksLinesIntoSubpaths) {
   EXPECT_EQ(svg.find("inf"), std::string::npos);
   std::vector<std::string> data_paths;
   for (const Element* p : find_all(xml.elements, "path"))
-    if (p->attrs.count("stroke") && p->attrs.at("stroke") == palette(0).hex()) data_paths.push_back(p->attrs.at("d"));
+    if (p->attrs.count("stroke") && p->attrs.at("stroke") == palette(0).hex())
+      data_paths.push_back(p->attrs.at("d"));
   ASSERT_EQ(data_paths.size(), 1u);
   EXPECT_EQ(count_of(data_paths[0], 'M'), 2);  // [0, 1] and [3, 5]
   EXPECT_EQ(count_of(data_paths[0], 'L'), 3);
@@ -155,8 +156,8 @@ TEST(Figure, TextIsEscaped) {
   EXPECT_NE(svg.find("Run &lt;7&gt; &amp; &quot;friends&quot;"), std::string::npos);
   EXPECT_NE(svg.find("&lt;/svg&gt;&lt;script&gt;"), std::string::npos);
   EXPECT_EQ(svg.find("<script"), std::string::npos);
-  EXPECT_NE(svg.find("ok \xc3\xa9"), std::string::npos);    // valid UTF-8 kept
-  EXPECT_NE(svg.find("\xef\xbf\xbd"), std::string::npos);   // invalid bytes replaced
+  EXPECT_NE(svg.find("ok \xc3\xa9"), std::string::npos);   // valid UTF-8 kept
+  EXPECT_NE(svg.find("\xef\xbf\xbd"), std::string::npos);  // invalid bytes replaced
   EXPECT_EQ(svg.find('\x07'), std::string::npos);
   EXPECT_EQ(xml_escape("a&b<c>\"d'"), "a&amp;b&lt;c&gt;&quot;d&apos;");
 }
@@ -176,18 +177,34 @@ TEST(Figure, EveryArtistInAGridIsWellFormed) {
   dashed.label = "reference";
   FillStyle band_style;
   band_style.label = "band";
-  fig.axes(0, 0).title("series").xlabel("t [s]").ylabel("eta [m]").band(t, lo, hi, band_style).line(t, m)
-      .step(t, m, {}, Step::kPre).hline(0.5, dashed).vline(2.0).legend(Legend::kLowerRight);
+  fig.axes(0, 0)
+      .title("series")
+      .xlabel("t [s]")
+      .ylabel("eta [m]")
+      .band(t, lo, hi, band_style)
+      .line(t, m)
+      .step(t, m, {}, Step::kPre)
+      .hline(0.5, dashed)
+      .vline(2.0)
+      .legend(Legend::kLowerRight);
   MarkerStyle tri;
   tri.marker = Marker::kTriangle;
   tri.label = "runs";
-  fig.axes(0, 1).scatter({1, 2, 3}, {3, 1, 2}, tri).scatter({1, 2}, {2, 2}, MarkerStyle{std::nullopt, Marker::kCross, 5.0, 1.0, ""})
-      .histogram({0.5, 1.5, 1.7, 2.2, 2.9}, 4).legend(Legend::kUpperRight);
+  fig.axes(0, 1)
+      .scatter({1, 2, 3}, {3, 1, 2}, tri)
+      .scatter({1, 2}, {2, 2}, MarkerStyle{std::nullopt, Marker::kCross, 5.0, 1.0, ""})
+      .histogram({0.5, 1.5, 1.7, 2.2, 2.9}, 4)
+      .legend(Legend::kUpperRight);
   std::vector<double> xe{0, 1, 2, 3}, ye{0, 1, 2}, v{0.0, 0.5, kNaN, 0.25, 1.0, 0.75};
   HeatmapStyle hs;
   hs.colorbar_label = "P(overtop)";
-  fig.axes(1, 0).title("map").equal_aspect().heatmap(xe, ye, v, hs).rect(0.2, 0.2, 0.8, 0.6)
-      .polygon({1, 2, 1.5}, {1, 1, 1.8}).text(0.05, 0.95, "note", TextStyle{9, Color{}, Anchor::kStart, true});
+  fig.axes(1, 0)
+      .title("map")
+      .equal_aspect()
+      .heatmap(xe, ye, v, hs)
+      .rect(0.2, 0.2, 0.8, 0.6)
+      .polygon({1, 2, 1.5}, {1, 1, 1.8})
+      .text(0.05, 0.95, "note", TextStyle{9, Color{}, Anchor::kStart, true});
   fig.axes(1, 1).yscale(Scale::kLog).bars({0, 1, 2, 3}, {10, 0, 1000}).ylim(1, 1e4);
   std::string svg = fig.to_svg();
   auto xml = check_xml(svg);

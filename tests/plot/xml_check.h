@@ -31,19 +31,22 @@ inline bool valid_entity(const std::string& s, std::size_t amp, std::size_t& end
     if (hex) ++i;
     if (i >= name.size()) return false;
     for (; i < name.size(); ++i)
-      if (!(hex ? std::isxdigit(static_cast<unsigned char>(name[i])) : std::isdigit(static_cast<unsigned char>(name[i]))))
+      if (!(hex ? std::isxdigit(static_cast<unsigned char>(name[i]))
+                : std::isdigit(static_cast<unsigned char>(name[i]))))
         return false;
     return true;
   }
   return false;
 }
 
-inline bool check_chars(const std::string& s, std::size_t from, std::size_t to, bool in_attr, std::string& error) {
+inline bool check_chars(const std::string& s, std::size_t from, std::size_t to, bool in_attr,
+                        std::string& error) {
   for (std::size_t i = from; i < to; ++i) {
     unsigned char c = static_cast<unsigned char>(s[i]);
     if (c == '<') return error = "stray '<' at " + std::to_string(i), false;
     if (in_attr && c == '"') return error = "'\"' inside attribute at " + std::to_string(i), false;
-    if (c < 0x20 && c != '\t' && c != '\n' && c != '\r') return error = "control character at " + std::to_string(i), false;
+    if (c < 0x20 && c != '\t' && c != '\n' && c != '\r')
+      return error = "control character at " + std::to_string(i), false;
     if (c == '&') {
       std::size_t end;
       if (!valid_entity(s, i, end)) return error = "bad entity at " + std::to_string(i), false;
@@ -58,7 +61,9 @@ inline XmlCheck check_xml(const std::string& s) {
   std::vector<std::size_t> stack;  // indices into r.elements
   bool root_seen = false;
   std::size_t i = 0;
-  auto name_char = [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' || c == ':' || c == '.'; };
+  auto name_char = [](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' || c == ':' || c == '.';
+  };
   while (i < s.size()) {
     std::size_t lt = s.find('<', i);
     std::size_t text_end = lt == std::string::npos ? s.size() : lt;
