@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "campaigns/commands.h"
 #include "flume_version.h"
 #include "solver/commands.h"
 
@@ -21,6 +22,8 @@ const std::vector<Command>& commands() {
       {"run", flume::run_main, "run SCENE.json --out DIR [--set path=value ...] [--threads N] [--backend cpu|cuda]"},
       {"bench", flume::bench_main, "bench SCENE.json --steps N [--set path=value ...] [--threads N]"},
       {"check", flume::check_main, "check SCENE.json [--set path=value ...]   validate a scene, print a summary"},
+      {"campaign", flume::campaign_main, "campaign run SPEC.json --db FILE [--workers N] | status --db FILE | export --db FILE --csv OUT"},
+      {"model", flume::model_main, "model ishigami|test --out DIR [--set name=value ...]   analytic stand-ins for `run`"},
   };
   return list;
 }

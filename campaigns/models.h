@@ -1,0 +1,25 @@
+// Analytic models that stand in for the solver: `flume model NAME --out DIR --set name=value ...` writes the
+// same run.json as `flume run`, so campaigns, their store and the report can be tested in seconds.
+//   ishigami: y = sin x1 + a sin^2 x2 + b x3^4 sin x1, a = 7, b = 0.1, inputs on [-pi, pi]
+//             (Ishigami & Homma 1990; its Sobol' indices are known in closed form).
+//   test:     y = x + 10 y_in + 100 z; `behaviour` ok|segfault|hang|unstable|fail picks how the run ends,
+//             after `sleep_s` seconds; for the crash, hang and kill tests.
+#pragma once
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace flume::campaigns {
+
+// The model's input names, or empty when there is no such model.
+std::vector<std::string> model_inputs(const std::string& model);
+std::vector<std::string> model_names();
+
+// Empty when the inputs (name -> JSON text) are acceptable, else "<name>: <problem>".
+std::string check_model_inputs(const std::string& model,
+                               const std::vector<std::pair<std::string, std::string>>& inputs);
+
+// `flume model NAME --out DIR [--set name=value ...]`.
+int model_main(int argc, char** argv);
+
+}  // namespace flume::campaigns

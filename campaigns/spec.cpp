@@ -1,0 +1,492 @@
+// Campaign spec JSON -> CampaignSpec, checked once here: every error names the file, the field path and
+// what is allowed, and is raised before anything touches the database.
+#include "campaigns/spec.h"
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <sstream>
+
+#include "campaigns/models.h"
+#include "common/errors.h"
+#include "solver/scene.h"
+
+namespace flume::campaigns {
+namespace {
+
+using json = nlohmann::json;
+namespace fs = std::filesystem;
+
+std::string fmt(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
+const char* type_name(const json& j) {
+  switch (j.type()) {
+    case json::value_t::null: return "null";
+    case json::value_t::boolean: return "a boolean";
+    case json::value_t::string: return "a string";
+    case json::value_t::array: return "an array";
+    case json::value_t::object: return "an object";
+    default: return "a number";
+  }
+}
+
+// A JSON object being read; finish() rejects fields nobody asked for, so a typo is an error.
+class Reader {
+ public:
+  Reader(const json& j, std::string path, const std::string& file) : j_(j), path_(std::move(path)), file_(file) {
+    if (!j_.is_object()) fail("", std::string("must be an object, got ") + type_name(j_));
+  }
+  [[noreturn]] void fail(const std::string& key, const std::string& what) const {
+    throw InputError(file_, join(key), what);
+  }
+  std::string join(const std::string& key) const {
+    if (key.empty()) return path_;
+    return path_.empty() ? key : path_ + "." + key;
+  }
+  bool has(const std::string& key) const { return j_.contains(key); }
+  const json& raw(const std::string& key) {
+    used_.insert(key);
+    return j_.at(key);
+  }
+  double number(const std::string& key, std::optional<double> def, double lo = -kInf, double hi = kInf,
+                bool lo_open = false) {
+    if (!has(key)) {
+      if (!def) fail(key, "is required (a number in " + range(lo, hi, lo_open) + ")");
+      return *def;
+    }
+    const json& v = raw(key);
+    if (!v.is_number()) fail(key, std::string("must be a number, got ") + type_name(v));
+    const double x = v.get<double>();
+    if (!std::isfinite(x) || (lo_open ? !(x > lo) : !(x >= lo)) || !(x <= hi))
+      fail(key, "must be in " + range(lo, hi, lo_open) + " (got " + fmt(x) + ")");
+    return x;
+  }
+  std::int64_t integer(const std::string& key, std::optional<std::int64_t> def, std::int64_t lo, std::int64_t hi) {
+    if (!has(key)) {
+      if (!def) fail(key, "is required (an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "])");
+      return *def;
+    }
+    const json& v = raw(key);
+    if (!v.is_number() || std::floor(v.get<double>()) != v.get<double>())
+      fail(key, std::string("must be an integer, got ") + (v.is_number() ? fmt(v.get<double>()) : type_name(v)));
+    const double x = v.get<double>();
+    if (x < static_cast<double>(lo) || x > static_cast<double>(hi))
+      fail(key, "must be in [" + std::to_string(lo) + ", " + std::to_string(hi) + "] (got " + fmt(x) + ")");
+    return static_cast<std::int64_t>(x);
+  }
+  std::string string(const std::string& key, std::optional<std::string> def) {
+    if (!has(key)) {
+      if (!def) fail(key, "is required (a string)");
+      return *def;
+    }
+    const json& v = raw(key);
+    if (!v.is_string()) fail(key, std::string("must be a string, got ") + type_name(v));
+    return v.get<std::string>();
+  }
+  template <typename E>
+  E choice(const std::string& key, std::optional<E> def, const std::vector<std::pair<const char*, E>>& options) {
+    std::string allowed;
+    for (const auto& o : options) allowed += (allowed.empty() ? "" : "|") + std::string(o.first);
+    if (!has(key)) {
+      if (!def) fail(key, "is required (one of " + allowed + ")");
+      return *def;
+    }
+    const json& v = raw(key);
+    if (!v.is_string()) fail(key, "must be one of " + allowed + ", got " + type_name(v));
+    for (const auto& o : options)
+      if (v.get<std::string>() == o.first) return o.second;
+    fail(key, "must be one of " + allowed + " (got '" + v.get<std::string>() + "')");
+  }
+  Reader object(const std::string& key) {
+    static const json empty = json::object();
+    return has(key) ? Reader(raw(key), join(key), file_) : Reader(empty, join(key), file_);
+  }
+  const json& array(const std::string& key) {
+    static const json empty = json::array();
+    if (!has(key)) return empty;
+    const json& v = raw(key);
+    if (!v.is_array()) fail(key, std::string("must be an array, got ") + type_name(v));
+    return v;
+  }
+  void finish() const {
+    for (auto it = j_.begin(); it != j_.end(); ++it) {
+      if (used_.count(it.key())) continue;
+      std::string known;
+      for (const auto& k : used_) known += (known.empty() ? "" : ", ") + k;
+      fail(it.key(), "unknown field" + (known.empty() ? std::string() : " (read here: " + known + ")"));
+    }
+  }
+  void accept(const std::string& key) { used_.insert(key); }
+
+ private:
+  static constexpr double kInf = std::numeric_limits<double>::infinity();
+  static std::string range(double lo, double hi, bool lo_open) {
+    auto b = [](double v) { return std::isinf(v) ? std::string(v < 0 ? "-inf" : "inf") : fmt(v); };
+    return std::string(lo_open ? "(" : "[") + b(lo) + ", " + b(hi) + (std::isinf(hi) ? ")" : "]");
+  }
+  const json& j_;
+  std::string path_;
+  const std::string& file_;
+  std::set<std::string> used_;
+};
+
+using sampling::DesignType;
+using sampling::Distribution;
+using sampling::DistributionType;
+
+Distribution read_distribution(Reader& r) {
+  Distribution d;
+  d.type = r.choice<DistributionType>("type", std::nullopt,
+                                      {{"uniform", DistributionType::kUniform},
+                                       {"normal", DistributionType::kNormal},
+                                       {"lognormal", DistributionType::kLogNormal},
+                                       {"truncated_normal", DistributionType::kTruncatedNormal},
+                                       {"beta", DistributionType::kBeta},
+                                       {"choice", DistributionType::kChoice}});
+  switch (d.type) {
+    case DistributionType::kUniform:
+      d.lower = r.number("lower", std::nullopt);
+      d.upper = r.number("upper", std::nullopt);
+      break;
+    case DistributionType::kNormal:
+      d.mean = r.number("mean", std::nullopt);
+      d.std = r.number("std", std::nullopt, 0.0, std::numeric_limits<double>::infinity(), true);
+      break;
+    case DistributionType::kLogNormal:
+      if (r.has("mu_log") || r.has("sigma_log")) {
+        d.mu_log = r.number("mu_log", std::nullopt);
+        d.sigma_log = r.number("sigma_log", std::nullopt, 0.0, std::numeric_limits<double>::infinity(), true);
+      } else {
+        if (!r.has("mean")) r.fail("mean", "is required (a lognormal takes mean and std of the variable, or mu_log and sigma_log)");
+        const double mean = r.number("mean", std::nullopt, 0.0, std::numeric_limits<double>::infinity(), true);
+        const double std = r.number("std", std::nullopt, 0.0, std::numeric_limits<double>::infinity(), true);
+        d = sampling::lognormal_from_mean_std(mean, std);
+      }
+      break;
+    case DistributionType::kTruncatedNormal:
+      d.mean = r.number("mean", std::nullopt);
+      d.std = r.number("std", std::nullopt, 0.0, std::numeric_limits<double>::infinity(), true);
+      d.lower = r.number("lower", std::nullopt);
+      d.upper = r.number("upper", std::nullopt);
+      break;
+    case DistributionType::kBeta:
+      d.alpha = r.number("alpha", std::nullopt, 0.0, std::numeric_limits<double>::infinity(), true);
+      d.beta = r.number("beta", std::nullopt, 0.0, std::numeric_limits<double>::infinity(), true);
+      d.lower = r.number("lower", 0.0);
+      d.upper = r.number("upper", 1.0);
+      break;
+    case DistributionType::kChoice: {
+      const json& values = r.array("values");
+      if (!r.has("values")) r.fail("values", "is required (an array of numbers or of strings)");
+      for (size_t i = 0; i < values.size(); ++i) {
+        if (values[i].is_number()) {
+          d.numeric_choices.push_back(values[i].get<double>());
+        } else if (values[i].is_string()) {
+          d.text_choices.push_back(values[i].get<std::string>());
+        } else {
+          r.fail("values." + std::to_string(i), std::string("must be a number or a string, got ") + type_name(values[i]));
+        }
+      }
+      const json& weights = r.array("weights");
+      for (size_t i = 0; i < weights.size(); ++i) {
+        if (!weights[i].is_number()) r.fail("weights." + std::to_string(i), "must be a number");
+        d.weights.push_back(weights[i].get<double>());
+      }
+      std::set<std::string> seen;
+      for (size_t i = 0; i < values.size(); ++i)
+        if (!seen.insert(values[i].dump()).second)
+          r.fail("values." + std::to_string(i), "repeats the value " + values[i].dump() + " (use weights instead)");
+      break;
+    }
+  }
+  const std::string problem = sampling::check_distribution(d);
+  if (!problem.empty()) {
+    const auto colon = problem.find(": ");
+    r.fail(problem.substr(0, colon), problem.substr(colon + 2));
+  }
+  r.finish();
+  return d;
+}
+
+// Where a relative scene path points: the current directory first (as a user typing the command expects),
+// then the spec's folder (a spec kept next to its scene).
+std::string resolve_scene(const std::string& path, const std::string& base_dir) {
+  fs::path p(path);
+  if (p.is_absolute()) return p.lexically_normal().string();
+  std::error_code ec;
+  if (fs::exists(p, ec)) return fs::absolute(p, ec).lexically_normal().string();
+  if (!base_dir.empty() && fs::exists(fs::path(base_dir) / p, ec))
+    return fs::absolute(fs::path(base_dir) / p, ec).lexically_normal().string();
+  return "";
+}
+
+std::string read_file(const std::string& file) {
+  std::ifstream in(file);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+// Checks that the scene (or model) accepts the overrides, each parameter path, and every design point.
+void validate_against_target(const CampaignSpec& spec, const sampling::Design& design) {
+  const size_t np = spec.parameters.size();
+  auto point_sets = [&](size_t k) {
+    std::vector<std::pair<std::string, std::string>> sets = spec.overrides;
+    for (size_t j = 0; j < np; ++j)
+      sets.emplace_back(spec.parameters[j].path, value_json(spec.parameters[j], design.values[k][j]));
+    return sets;
+  };
+  // Which parameter a failure belongs to: the one whose path the target named, else the last one tried.
+  auto owner = [&](const std::string& field) -> std::string {
+    for (size_t j = 0; j < np; ++j)
+      if (field == spec.parameters[j].path || field.rfind(spec.parameters[j].path + ".", 0) == 0 ||
+          spec.parameters[j].path.rfind(field + ".", 0) == 0)
+        return "parameters." + std::to_string(j) + ".distribution";
+    return "parameters";
+  };
+
+  if (!spec.model.empty()) {
+    std::string p = check_model_inputs(spec.model, spec.overrides);
+    if (!p.empty()) throw InputError(spec.file, "overrides." + p.substr(0, p.find(':')), p.substr(p.find(": ") + 2));
+    for (size_t j = 0; j < np; ++j) {
+      p = check_model_inputs(spec.model, {{spec.parameters[j].path, value_json(spec.parameters[j], design.values[0][j])}});
+      if (!p.empty() && p.find("not an input") != std::string::npos)
+        throw InputError(spec.file, "parameters." + std::to_string(j) + ".path", p);
+    }
+    for (size_t k = 0; k < design.values.size(); ++k) {
+      p = check_model_inputs(spec.model, point_sets(k));
+      if (!p.empty())
+        throw InputError(spec.file, owner(p.substr(0, p.find(':'))),
+                         "design point " + std::to_string(k) + " is rejected by model " + spec.model + ": " + p);
+    }
+    return;
+  }
+
+  const std::string text = read_file(spec.scene);
+  std::vector<Override> fixed;
+  for (const auto& [path, value] : spec.overrides) fixed.push_back({path, value});
+  try {
+    parse_scene_text(text, spec.scene, fixed);
+  } catch (const InputError& e) {
+    throw InputError(spec.file, "overrides", "the scene rejects the overrides: " + std::string(e.what()));
+  }
+  // Each path alone, at its first design value: an unknown path is reported against that parameter.
+  for (size_t j = 0; j < np; ++j) {
+    std::vector<Override> one = fixed;
+    one.push_back({spec.parameters[j].path, value_json(spec.parameters[j], design.values[0][j])});
+    try {
+      parse_scene_text(text, spec.scene, one);
+    } catch (const InputError& e) {
+      if (e.field() == spec.parameters[j].path || spec.parameters[j].path.rfind(e.field() + ".", 0) == 0 ||
+          e.problem().find("unknown field") != std::string::npos || e.problem().find("no such") != std::string::npos ||
+          e.problem().find("cannot set") != std::string::npos)
+        throw InputError(spec.file, "parameters." + std::to_string(j) + ".path",
+                         "'" + spec.parameters[j].path + "' is not a field of the scene: " + e.what());
+      throw InputError(spec.file, "parameters." + std::to_string(j) + ".distribution",
+                       "design point 0 is rejected by the scene: " + std::string(e.what()));
+    }
+  }
+  for (size_t k = 0; k < design.values.size(); ++k) {
+    std::vector<Override> all;
+    for (const auto& [path, value] : point_sets(k)) all.push_back({path, value});
+    try {
+      parse_scene_text(text, spec.scene, all);
+    } catch (const InputError& e) {
+      throw InputError(spec.file, owner(e.field()),
+                       "design point " + std::to_string(k) + " is rejected by the scene: " + e.what());
+    }
+  }
+}
+
+}  // namespace
+
+std::string text_hash(const std::string& text) {
+  std::uint64_t h = 1469598103934665603ull;
+  for (unsigned char c : text) {
+    h ^= c;
+    h *= 1099511628211ull;
+  }
+  char buf[17];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
+  return buf;
+}
+
+std::string value_json(const ParameterSpec& p, double value) {
+  const auto& d = p.distribution;
+  if (d.type == DistributionType::kChoice) {
+    const auto i = static_cast<size_t>(std::llround(value));
+    if (d.is_text_choice()) return json(d.text_choices.at(i)).dump();
+    return json(d.numeric_choices.at(i)).dump();
+  }
+  return json(value).dump();  // shortest text that reads back to the same double
+}
+
+CampaignSpec parse_campaign_spec(const std::string& json_text, const std::string& file_label,
+                                 const std::string& base_dir) {
+  json root_json;
+  try {
+    root_json = json::parse(json_text);
+  } catch (const json::parse_error& e) {
+    throw InputError(file_label, "", std::string("not valid JSON: ") + e.what());
+  }
+  CampaignSpec spec;
+  spec.file = file_label;
+  Reader root(root_json, "", spec.file);
+  spec.name = root.string("name", std::nullopt);
+  if (spec.name.empty() || spec.name.size() > 64 ||
+      spec.name.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_.-") !=
+          std::string::npos)
+    root.fail("name", "must be 1 to 64 characters from A-Z a-z 0-9 _ . - (got '" + spec.name + "')");
+  spec.description = root.string("description", std::string());
+
+  if (root.has("scene") == root.has("model"))
+    root.fail(root.has("scene") ? "model" : "scene", "exactly one of scene (a scene file) and model (" +
+                                                          std::string("ishigami|test") + ") is required");
+  if (root.has("scene")) {
+    const std::string scene = root.string("scene", std::nullopt);
+    spec.scene = resolve_scene(scene, base_dir);
+    if (spec.scene.empty())
+      root.fail("scene", "cannot open '" + scene + "' (looked in the current directory and next to the spec)");
+  } else {
+    spec.model = root.string("model", std::nullopt);
+    if (model_inputs(spec.model).empty()) {
+      std::string names;
+      for (const auto& n : model_names()) names += (names.empty() ? "" : "|") + n;
+      root.fail("model", "must be one of " + names + " (got '" + spec.model + "')");
+    }
+  }
+
+  {
+    Reader o = root.object("overrides");
+    if (root.has("overrides")) {
+      for (auto it = root_json["overrides"].begin(); it != root_json["overrides"].end(); ++it) {
+        o.accept(it.key());
+        spec.overrides.emplace_back(it.key(), it.value().dump());
+      }
+    }
+    o.finish();
+  }
+
+  const json& params = root.array("parameters");
+  if (params.empty()) root.fail("parameters", "is required: a non-empty array of {path, distribution}");
+  std::set<std::string> paths;
+  for (size_t i = 0; i < params.size(); ++i) {
+    Reader p(params[i], "parameters." + std::to_string(i), spec.file);
+    ParameterSpec ps;
+    ps.path = p.string("path", std::nullopt);
+    if (ps.path.empty()) p.fail("path", "must not be empty");
+    if (!paths.insert(ps.path).second) p.fail("path", "'" + ps.path + "' is already a parameter");
+    for (const auto& [path, value] : spec.overrides)
+      if (path == ps.path) p.fail("path", "'" + ps.path + "' is also a fixed override");
+    if (!p.has("distribution")) p.fail("distribution", "is required (an object with a type)");
+    Reader d = p.object("distribution");
+    ps.distribution = read_distribution(d);
+    p.finish();
+    spec.parameters.push_back(ps);
+  }
+
+  const json& corr = root.array("correlation");
+  for (size_t i = 0; i < corr.size(); ++i) {
+    Reader c(corr[i], "correlation." + std::to_string(i), spec.file);
+    const json& pair = c.array("parameters");
+    if (pair.size() != 2 || !pair[0].is_string() || !pair[1].is_string())
+      c.fail("parameters", "must be an array of two parameter paths");
+    sampling::RankCorrelation rc;
+    auto index_of = [&](const std::string& path, int k) {
+      for (size_t j = 0; j < spec.parameters.size(); ++j)
+        if (spec.parameters[j].path == path) return j;
+      c.fail("parameters." + std::to_string(k), "'" + path + "' is not one of the campaign's parameters");
+    };
+    rc.a = index_of(pair[0].get<std::string>(), 0);
+    rc.b = index_of(pair[1].get<std::string>(), 1);
+    if (rc.a == rc.b) c.fail("parameters", "must name two different parameters");
+    rc.rho = c.number("rank", std::nullopt, -0.99, 0.99);
+    c.finish();
+    spec.correlations.push_back(rc);
+  }
+
+  {
+    if (!root.has("design")) root.fail("design", "is required (an object with type and samples)");
+    Reader d = root.object("design");
+    const std::vector<std::pair<const char*, DesignType>> types = {{"monte_carlo", DesignType::kMonteCarlo},
+                                                                   {"lhs", DesignType::kLatinHypercube},
+                                                                   {"sobol", DesignType::kSobol},
+                                                                   {"grid", DesignType::kGrid},
+                                                                   {"one_at_a_time", DesignType::kOneAtATime},
+                                                                   {"saltelli", DesignType::kSaltelli}};
+    spec.design.type = d.choice<DesignType>("type", std::nullopt, types);
+    const auto t = spec.design.type;
+    const bool needs_samples = t == DesignType::kMonteCarlo || t == DesignType::kLatinHypercube ||
+                               t == DesignType::kSobol || t == DesignType::kSaltelli ||
+                               (t == DesignType::kGrid && !d.has("levels"));
+    if (needs_samples || d.has("samples"))
+      spec.design.samples = static_cast<size_t>(d.integer("samples", std::nullopt, 1, 10000000));
+    if (t == DesignType::kGrid || t == DesignType::kOneAtATime) {
+      spec.design.levels = static_cast<size_t>(d.integer("levels", t == DesignType::kGrid ? 0 : 1, t == DesignType::kGrid ? 2 : 1, 1000));
+    }
+    if (t == DesignType::kSaltelli)
+      spec.design.saltelli_base = d.choice<DesignType>("base", DesignType::kMonteCarlo,
+                                                       {{"monte_carlo", DesignType::kMonteCarlo},
+                                                        {"lhs", DesignType::kLatinHypercube},
+                                                        {"sobol", DesignType::kSobol}});
+    d.finish();
+    const size_t n = sampling::design_size([&] {
+      std::vector<Distribution> ds;
+      for (const auto& p : spec.parameters) ds.push_back(p.distribution);
+      return ds;
+    }(), spec.design);
+    if (n == 0) d.fail(t == DesignType::kGrid ? "levels" : "samples", "gives a design with no points");
+    if (n > 10000000) d.fail("samples", "gives " + std::to_string(n) + " runs; at most 10000000 are allowed");
+  }
+
+  spec.seed = static_cast<std::uint64_t>(root.integer("seed", std::nullopt, 0, 4294967295LL));
+
+  {
+    Reader r = root.object("run");
+    spec.run.time_limit_s = r.number("time_limit_s", 3600.0, 0.0, 30.0 * 86400, true);
+    spec.run.threads = static_cast<int>(r.integer("threads", 1, 1, 1024));
+    spec.run.memory_limit_mb = r.number("memory_limit_mb", 0.0, 0.0, 1e9);
+    spec.run.output_dir = r.string("output_dir", std::string());
+    r.finish();
+  }
+  root.finish();
+
+  // The campaign's identity: what decides the design and the results. `run` and `description` may change
+  // between a job and its resume (a longer time limit, more threads).
+  json identity = root_json;
+  identity.erase("run");
+  identity.erase("description");
+  spec.canonical = identity.dump();
+  spec.hash = text_hash(spec.canonical);
+
+  std::vector<Distribution> dists;
+  for (const auto& p : spec.parameters) dists.push_back(p.distribution);
+  sampling::Design design;
+  try {
+    design = sampling::generate_design(dists, spec.correlations, spec.design, spec.seed);
+  } catch (const std::exception& e) {
+    throw InputError(spec.file, spec.correlations.empty() ? "design" : "correlation", e.what());
+  }
+  validate_against_target(spec, design);
+  spec.points = std::move(design);
+  return spec;
+}
+
+CampaignSpec load_campaign_spec(const std::string& file) {
+  std::ifstream in(file);
+  if (!in) throw InputError(file, "", "cannot open the campaign spec");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  const std::string dir = fs::path(file).parent_path().string();
+  return parse_campaign_spec(ss.str(), file, dir);
+}
+
+}  // namespace flume::campaigns
