@@ -1,0 +1,2 @@
+#include <gtest/gtest.h>
+#include "solver/rigid/rigid_world.h"
