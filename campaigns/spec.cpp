@@ -2,6 +2,7 @@
 // what is allowed, and is raised before anything touches the database.
 #include "campaigns/spec.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -426,7 +427,10 @@ CampaignSpec parse_campaign_spec(const std::string& json_text, const std::string
     const auto t = spec.design.type;
     const bool needs_samples = t == DesignType::kMonteCarlo || t == DesignType::kLatinHypercube ||
                                t == DesignType::kSobol || t == DesignType::kSaltelli ||
-                               (t == DesignType::kGrid && !d.has("levels"));
+                               (t == DesignType::kGrid && !d.has("levels") &&
+                                std::any_of(spec.parameters.begin(), spec.parameters.end(), [](const auto& p) {
+                                  return p.distribution.type != sampling::DistributionType::kChoice;
+                                }));
     if (needs_samples || d.has("samples"))
       spec.design.samples = static_cast<size_t>(d.integer("samples", std::nullopt, 1, 10000000));
     if (t == DesignType::kGrid || t == DesignType::kOneAtATime) {

@@ -100,8 +100,9 @@ size_t design_size(const std::vector<Distribution>& parameters, const DesignSpec
   }
 }
 
-Design generate_design(const std::vector<Distribution>& parameters, const std::vector<RankCorrelation>& correlations,
-                       const DesignSpec& spec, std::uint64_t seed) {
+namespace {
+Design generate(const std::vector<Distribution>& parameters, const std::vector<RankCorrelation>& correlations,
+                const DesignSpec& spec, std::uint64_t seed) {
   const size_t dim = parameters.size();
   if (dim == 0) throw std::invalid_argument("a design needs at least one parameter");
   for (const auto& c : correlations)
@@ -161,6 +162,21 @@ Design generate_design(const std::vector<Distribution>& parameters, const std::v
     for (size_t j = 0; j < dim; ++j) design.unit[i][j] = unit(i, j);
   design.values = to_values(unit, parameters, correlations);
   return design;
+}
+}  // namespace
+
+Design generate_design(const std::vector<Distribution>& parameters, const std::vector<RankCorrelation>& correlations,
+                       const DesignSpec& spec, std::uint64_t seed) {
+  try {
+    return generate(parameters, correlations, spec, seed);
+  } catch (const OT::Exception& e) {
+    // OpenTURNS messages start with "Error: "; keep the reason only, on one line.
+    std::string what = e.what();
+    if (what.rfind("Error: ", 0) == 0) what = what.substr(7);
+    for (char& c : what)
+      if (c == '\n') c = ' ';
+    throw std::invalid_argument(what);
+  }
 }
 
 double centred_l2_discrepancy(const std::vector<std::vector<double>>& unit_points) {

@@ -5,6 +5,8 @@
 #include <sqlite3.h>
 
 #include <algorithm>
+#include <cstdio>
+#include <cstdlib>
 #include <cmath>
 #include <set>
 #include <sstream>
@@ -123,11 +125,14 @@ std::string csv(const std::string& s) {
   return q + "\"";
 }
 
+// Shortest text that reads back to the same double (%.17g prints 0.2 as 0.20000000000000001).
 std::string format_number(double v) {
-  std::ostringstream s;
-  s.precision(17);
-  s << v;
-  return s.str();
+  char buf[32];
+  for (int precision = 15; precision <= 17; ++precision) {
+    std::snprintf(buf, sizeof buf, "%.*g", precision, v);
+    if (std::strtod(buf, nullptr) == v) break;
+  }
+  return buf;
 }
 
 }  // namespace
@@ -151,9 +156,12 @@ CampaignStore::CampaignStore(const std::string& file, bool read_only) : file_(fi
   // A reader (`campaign status`) may meet the writer mid-transaction: wait rather than fail.
   sqlite3_busy_timeout(db_, 30000);
   try {
-    Stmt tables(db_, "SELECT count(*) FROM sqlite_master WHERE type = 'table'");
-    tables.step();
-    const bool empty = tables.i64(0) == 0;
+    bool empty = false;
+    {
+      Stmt tables(db_, "SELECT count(*) FROM sqlite_master WHERE type = 'table'");
+      tables.step();
+      empty = tables.i64(0) == 0;
+    }
     if (empty && read_only) throw InputError(file, "", "not a flume campaign database (it has no tables)");
     if (!read_only) {
       exec(db_, "PRAGMA journal_mode = WAL");

@@ -1,0 +1,385 @@
+// `flume campaign` end to end on the analytic models: each test runs the real executable as a user would.
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sqlite3.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <random>
+#include <set>
+#include <sstream>
+#include <thread>
+
+extern char** environ;
+
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::path test_dir() {
+  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+  const fs::path dir = fs::temp_directory_path() /
+                       ("flume_campaign_" + std::to_string(getpid()) + "_" + info->test_suite_name() + "_" + info->name());
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+void write_file(const fs::path& p, const std::string& text) {
+  std::ofstream out(p);
+  out << text;
+}
+
+std::string read_file(const fs::path& p) {
+  std::ifstream in(p);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+pid_t spawn(const std::vector<std::string>& args, const fs::path& out, const fs::path& err) {
+  posix_spawn_file_actions_t fa;
+  posix_spawn_file_actions_init(&fa);
+  posix_spawn_file_actions_addopen(&fa, 1, out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_addopen(&fa, 2, err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  std::vector<char*> argv;
+  for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+  argv.push_back(nullptr);
+  pid_t pid = -1;
+  const int rc = posix_spawn(&pid, argv[0], &fa, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&fa);
+  return rc == 0 ? pid : -1;
+}
+
+// Exit code, or 128 + signal; kills the process and returns -1 past the timeout.
+int wait_for(pid_t pid, double timeout_s) {
+  const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+  for (;;) {
+    int status = 0;
+    const pid_t r = waitpid(pid, &status, WNOHANG);
+    if (r == pid) return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+    if (std::chrono::steady_clock::now() > end) {
+      kill(pid, SIGKILL);
+      waitpid(pid, &status, 0);
+      return -1;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+}
+
+struct Result {
+  int rc;
+  std::string out, err;
+};
+
+Result run(const std::vector<std::string>& args, const fs::path& dir, double timeout_s = 90) {
+  const fs::path out = dir / "cmd.out", err = dir / "cmd.err";
+  const pid_t pid = spawn(args, out, err);
+  EXPECT_GT(pid, 0);
+  const int rc = wait_for(pid, timeout_s);
+  return {rc, read_file(out), read_file(err)};
+}
+
+std::vector<std::string> flume(std::initializer_list<std::string> args) {
+  std::vector<std::string> v = {FLUME_EXE};
+  v.insert(v.end(), args);
+  return v;
+}
+
+using Rows = std::vector<std::vector<std::string>>;
+Rows query(const fs::path& db, const std::string& sql) {
+  sqlite3* h = nullptr;
+  Rows rows;
+  if (sqlite3_open_v2(db.c_str(), &h, SQLITE_OPEN_READONLY, nullptr) != SQLITE_OK) {
+    sqlite3_close(h);
+    ADD_FAILURE() << "cannot open " << db;
+    return rows;
+  }
+  sqlite3_busy_timeout(h, 10000);
+  sqlite3_stmt* s = nullptr;
+  if (sqlite3_prepare_v2(h, sql.c_str(), -1, &s, nullptr) != SQLITE_OK) {
+    ADD_FAILURE() << sqlite3_errmsg(h) << " in " << sql;
+    sqlite3_close(h);
+    return rows;
+  }
+  while (sqlite3_step(s) == SQLITE_ROW) {
+    std::vector<std::string> row;
+    for (int i = 0; i < sqlite3_column_count(s); ++i) {
+      const unsigned char* t = sqlite3_column_text(s, i);
+      row.push_back(t ? reinterpret_cast<const char*>(t) : "NULL");
+    }
+    rows.push_back(row);
+  }
+  sqlite3_finalize(s);
+  sqlite3_close(h);
+  return rows;
+}
+std::string scalar(const fs::path& db, const std::string& sql) {
+  const Rows r = query(db, sql);
+  return r.empty() || r[0].empty() ? "" : r[0][0];
+}
+
+// A campaign of the `test` model: `runs` LHS points of x, each run sleeping `sleep_s`.
+std::string test_spec(const std::string& name, int runs, double sleep_s) {
+  std::ostringstream s;
+  s << R"({"name": ")" << name << R"(", "model": "test", "overrides": {"sleep_s": )" << sleep_s << R"(},
+  "parameters": [{"path": "x", "distribution": {"type": "uniform", "lower": 0.0, "upper": 1.0}}],
+  "design": {"type": "lhs", "samples": )" << runs << R"(}, "seed": 7, "run": {"time_limit_s": 60}})";
+  return s.str();
+}
+
+void expect_each_point_ok_once(const fs::path& db, int runs) {
+  EXPECT_EQ(scalar(db, "SELECT count(*) FROM runs"), std::to_string(runs));
+  EXPECT_EQ(scalar(db, "SELECT count(*) FROM runs WHERE status = 'ok'"), std::to_string(runs));
+  EXPECT_EQ(scalar(db, "SELECT count(DISTINCT param_hash) FROM runs"), std::to_string(runs));
+  EXPECT_EQ(scalar(db, "SELECT count(DISTINCT params) FROM runs"), std::to_string(runs));
+  EXPECT_EQ(scalar(db, "SELECT count(DISTINCT design_index) FROM design_points"), std::to_string(runs));
+  // Every ok run has its metric, and it is the model's y = x for these runs.
+  EXPECT_EQ(scalar(db, "SELECT count(*) FROM runs r JOIN metrics m ON m.run = r.id AND m.name = 'y' "
+                       "WHERE abs(m.value - r.x) < 1e-12"),
+            std::to_string(runs));
+  EXPECT_EQ(scalar(db, "PRAGMA integrity_check"), "ok");
+}
+
+bool have_mpirun() { return std::string(FLUME_MPIRUN).size() > 0 && fs::exists(FLUME_MPIRUN); }
+
+std::vector<std::string> mpirun(int ranks, const fs::path& spec, const fs::path& db) {
+  return {FLUME_MPIRUN, "--allow-run-as-root", "--oversubscribe", "-np", std::to_string(ranks),
+          "--mca", "btl", "self,vader,tcp", FLUME_EXE, "campaign", "run", spec.string(), "--db", db.string()};
+}
+
+}  // namespace
+
+// Issue 5, point 2: kill -9 at 20 random moments of a 40-run campaign, resuming each time.
+TEST(CampaignResume, KillNineAtTwentyRandomMomentsThenEveryRunOkOnce) {
+  const fs::path dir = test_dir();
+  const fs::path spec = dir / "spec.json", db = dir / "study.db";
+  write_file(spec, test_spec("kill-resume", 40, 0.05));
+  std::mt19937 rng(20240605);
+  std::uniform_real_distribution<double> moment_s(0.0, 0.8);
+  std::map<std::string, std::string> finished_before;  // run id -> finished time, for ok runs
+  int kills = 0;
+  for (int k = 0; k < 20; ++k) {
+    const pid_t pid = spawn(flume({"campaign", "run", spec.string(), "--db", db.string(), "--workers", "2"}),
+                            dir / "out.log", dir / "err.log");
+    ASSERT_GT(pid, 0);
+    std::this_thread::sleep_for(std::chrono::duration<double>(moment_s(rng)));
+    kill(pid, SIGKILL);
+    const int rc = wait_for(pid, 30);
+    kills += rc == 128 + SIGKILL;
+    if (!fs::exists(db) || scalar(db, "SELECT count(*) FROM sqlite_master WHERE name = 'runs'") != "1") continue;
+    // A finished run is never redone: its finish time survives every later kill and resume.
+    for (const auto& [id, finished] : finished_before)
+      EXPECT_EQ(scalar(db, "SELECT finished FROM runs WHERE id = " + id), finished) << "run " << id << " was redone";
+    for (const auto& row : query(db, "SELECT id, finished FROM runs WHERE status = 'ok'")) finished_before[row[0]] = row[1];
+  }
+  EXPECT_GE(kills, 15) << "most kills should land while the campaign was still running";
+  const Result last = run(flume({"campaign", "run", spec.string(), "--db", db.string(), "--workers", "2"}), dir);
+  ASSERT_EQ(last.rc, 0) << last.err;
+  expect_each_point_ok_once(db, 40);
+  for (const auto& [id, finished] : finished_before)
+    EXPECT_EQ(scalar(db, "SELECT finished FROM runs WHERE id = " + id), finished) << "run " << id << " was redone";
+}
+
+// Issue 5, point 3: a segfault, a hang past the time limit and an unstable run are recorded; the rest finish.
+TEST(CampaignFailures, SegfaultHangUnstableAreRecordedAndOthersComplete) {
+  const fs::path dir = test_dir();
+  const fs::path spec = dir / "spec.json", db = dir / "study.db";
+  write_file(spec, R"({"name": "failures", "model": "test",
+  "parameters": [{"path": "behaviour", "distribution": {"type": "choice", "values": ["ok", "segfault", "hang", "unstable", "fail"]}},
+                 {"path": "x", "distribution": {"type": "choice", "values": [1, 2]}}],
+  "design": {"type": "grid"}, "seed": 1, "run": {"time_limit_s": 1.0}})");
+  const Result r = run(flume({"campaign", "run", spec.string(), "--db", db.string(), "--workers", "3"}), dir);
+  ASSERT_EQ(r.rc, 0) << r.err;
+  const Rows rows = query(db, "SELECT behaviour, status, coalesce(message, '') FROM runs ORDER BY behaviour, x");
+  ASSERT_EQ(rows.size(), 10u);
+  std::map<std::string, int> seen;
+  for (const auto& row : rows) {
+    const std::string& behaviour = row[0];
+    const std::string& status = row[1];
+    const std::string& message = row[2];
+    ++seen[behaviour];
+    if (behaviour == "ok") {
+      EXPECT_EQ(status, "ok");
+    } else if (behaviour == "segfault") {
+      EXPECT_EQ(status, "failed");
+      EXPECT_NE(message.find("signal 11"), std::string::npos) << message;
+    } else if (behaviour == "hang") {
+      EXPECT_EQ(status, "timeout");
+      EXPECT_NE(message.find("time limit of 1 s"), std::string::npos) << message;
+    } else if (behaviour == "unstable") {
+      EXPECT_EQ(status, "unstable");
+      EXPECT_NE(message.find("CFL"), std::string::npos) << message;
+    } else {
+      EXPECT_EQ(status, "failed");
+      EXPECT_NE(message.find("internal error"), std::string::npos) << message;
+    }
+  }
+  EXPECT_EQ(seen.size(), 5u);
+  // The ok runs carry their metric; the failures are listed by `status` with their messages.
+  EXPECT_EQ(scalar(db, "SELECT count(*) FROM metrics m JOIN runs r ON r.id = m.run WHERE r.status = 'ok'"), "2");
+  const Result st = run(flume({"campaign", "status", "--db", db.string()}), dir);
+  ASSERT_EQ(st.rc, 0) << st.err;
+  EXPECT_NE(st.out.find("ok 2  unstable 2  failed 4  timeout 2"), std::string::npos) << st.out;
+  EXPECT_NE(st.out.find("signal 11"), std::string::npos) << st.out;
+  EXPECT_NE(st.out.find("time limit"), std::string::npos) << st.out;
+}
+
+// Issue 5, point 4 (first half): mpirun -np 3 gives the same results as the local pool.
+TEST(CampaignMpi, SameResultsAsLocalPool) {
+  if (!have_mpirun()) GTEST_SKIP() << "mpirun not found";
+  const fs::path dir = test_dir();
+  const fs::path spec = dir / "spec.json";
+  write_file(spec, R"({"name": "ishigami-sobol", "model": "ishigami",
+  "parameters": [{"path": "x1", "distribution": {"type": "uniform", "lower": -3.141592653589793, "upper": 3.141592653589793}},
+                 {"path": "x2", "distribution": {"type": "uniform", "lower": -3.141592653589793, "upper": 3.141592653589793}},
+                 {"path": "x3", "distribution": {"type": "uniform", "lower": -3.141592653589793, "upper": 3.141592653589793}}],
+  "design": {"type": "sobol", "samples": 12}, "seed": 3})");
+  const Result local = run(flume({"campaign", "run", spec.string(), "--db", (dir / "local.db").string(), "--workers", "2"}), dir);
+  ASSERT_EQ(local.rc, 0) << local.err;
+  const Result mpi = run(mpirun(3, spec, dir / "mpi.db"), dir);
+  ASSERT_EQ(mpi.rc, 0) << mpi.out << mpi.err;
+  const std::string sql =
+      "SELECT r.param_hash, r.status, printf('%.17g', m.value) FROM runs r JOIN metrics m ON m.run = r.id "
+      "ORDER BY r.param_hash";
+  const Rows a = query(dir / "local.db", sql), b = query(dir / "mpi.db", sql);
+  EXPECT_EQ(a.size(), 12u);
+  EXPECT_EQ(a, b);
+  // The work was spread over both worker ranks.
+  EXPECT_EQ(scalar(dir / "mpi.db", "SELECT count(DISTINCT worker) FROM runs"), "2");
+}
+
+// Issue 5, point 4 (second half): kill one rank mid-campaign; running the job again completes it.
+TEST(CampaignMpi, KillOneRankThenRerunEndsWithEveryRunOkOnce) {
+  if (!have_mpirun()) GTEST_SKIP() << "mpirun not found";
+  const fs::path dir = test_dir();
+  const fs::path spec = dir / "spec.json", db = dir / "study.db";
+  write_file(spec, test_spec("mpi-kill", 16, 0.3));
+  const pid_t job = spawn(mpirun(3, spec, db), dir / "job.out", dir / "job.err");
+  ASSERT_GT(job, 0);
+  // Wait until a worker rank is running a run and at least two runs are done, then kill that rank.
+  long victim = 0;
+  for (int i = 0; i < 3000 && !victim; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    // The job creates the file before its schema: wait for the table, not just the file.
+    if (!fs::exists(db) || scalar(db, "SELECT count(*) FROM sqlite_master WHERE name = 'runs'") != "1") continue;
+    if (std::atoi(scalar(db, "SELECT count(*) FROM runs WHERE status = 'ok'").c_str()) < 2) continue;
+    const std::string worker = scalar(db, "SELECT worker FROM runs WHERE status = 'running' AND worker LIKE 'rank %' LIMIT 1");
+    const auto at = worker.find(" pid ");
+    if (at != std::string::npos) victim = std::atol(worker.c_str() + at + 5);
+  }
+  ASSERT_GT(victim, 0) << read_file(dir / "job.err");
+  ASSERT_EQ(kill(static_cast<pid_t>(victim), SIGKILL), 0);
+  const int rc = wait_for(job, 60);
+  EXPECT_NE(rc, 0) << "the job should end when one of its ranks dies";
+  EXPECT_NE(rc, -1) << "the job hung after a rank died";
+  const int ok_before = std::atoi(scalar(db, "SELECT count(*) FROM runs WHERE status = 'ok'").c_str());
+  EXPECT_LT(ok_before, 16);
+  const Result again = run(mpirun(3, spec, db), dir);
+  ASSERT_EQ(again.rc, 0) << again.out << again.err;
+  expect_each_point_ok_once(db, 16);
+}
+
+// Issue 5, point 5: malformed specs give one line naming the field, exit 2, and leave the store unchanged.
+TEST(CampaignSpecErrors, MalformedSpecsExitTwoWithFieldPathAndLeaveDatabase) {
+  const fs::path dir = test_dir();
+  const fs::path db = dir / "study.db";
+  // A store with one finished campaign in it, to check that nothing changes.
+  write_file(dir / "good.json", test_spec("good", 3, 0.0));
+  const Result good = run(flume({"campaign", "run", (dir / "good.json").string(), "--db", db.string()}), dir);
+  ASSERT_EQ(good.rc, 0) << good.err;
+  const std::string before = read_file(db);
+  ASSERT_FALSE(before.empty());
+
+  // A scene for the scene-path checks: the smallest that flume::load_scene accepts.
+  write_file(dir / "tank.json", R"({"name": "tank", "dimension": 2, "domain": {"lo": [0, 0], "hi": [1, 1]},
+  "solver": {"dx": 0.05, "end_time": 0.1}, "water": [{"lo": [0.1, 0.1], "hi": [0.5, 0.5]}]})");
+  const std::string x = R"({"path": "x", "distribution": {"type": "uniform", "lower": 0, "upper": 1}})";
+  struct Case {
+    const char* what;
+    std::string spec;
+    std::string field;
+  };
+  const std::vector<Case> cases = {
+      {"unknown model input", R"({"name": "bad", "model": "ishigami", "parameters": [{"path": "x4", "distribution": {"type": "uniform", "lower": 0, "upper": 1}}], "design": {"type": "lhs", "samples": 4}, "seed": 1})",
+       "parameters.0.path"},
+      {"unknown scene path", R"({"name": "bad", "scene": ")" + (dir / "tank.json").string() + R"(", "parameters": [{"path": "debris.friction.flume", "distribution": {"type": "uniform", "lower": 0.15, "upper": 0.55}}], "design": {"type": "lhs", "samples": 4}, "seed": 1})",
+       "parameters.0.path"},
+      {"scene range", R"({"name": "bad", "scene": ")" + (dir / "tank.json").string() + R"(", "parameters": [{"path": "fluid.gamma", "distribution": {"type": "uniform", "lower": 5, "upper": 30}}], "design": {"type": "lhs", "samples": 8}, "seed": 1})",
+       "parameters.0.distribution"},
+      {"bad bounds", R"({"name": "bad", "model": "test", "parameters": [{"path": "x", "distribution": {"type": "uniform", "lower": 0.55, "upper": 0.15}}], "design": {"type": "lhs", "samples": 4}, "seed": 1})",
+       "parameters.0.distribution.upper"},
+      {"negative std", R"({"name": "bad", "model": "test", "parameters": [{"path": "x", "distribution": {"type": "normal", "mean": 1, "std": -1}}], "design": {"type": "lhs", "samples": 4}, "seed": 1})",
+       "parameters.0.distribution.std"},
+      {"unknown design", R"({"name": "bad", "model": "test", "parameters": [)" + x + R"(], "design": {"type": "latin", "samples": 4}, "seed": 1})",
+       "design.type"},
+      {"missing scene", R"({"name": "bad", "scene": "no/such/scene.json", "parameters": [)" + x + R"(], "design": {"type": "lhs", "samples": 4}, "seed": 1})",
+       "scene"},
+      {"unknown field", R"({"name": "bad", "model": "test", "parameters": [)" + x + R"(], "design": {"type": "lhs", "samples": 4}, "seed": 1, "sede": 2})",
+       "sede"},
+      {"no samples", R"({"name": "bad", "model": "test", "parameters": [)" + x + R"(], "design": {"type": "lhs"}, "seed": 1})",
+       "design.samples"},
+  };
+  for (const auto& c : cases) {
+    const fs::path spec = dir / "bad.json";
+    write_file(spec, c.spec);
+    const Result r = run(flume({"campaign", "run", spec.string(), "--db", db.string()}), dir);
+    EXPECT_EQ(r.rc, 2) << c.what << ": " << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << c.what << ": " << r.err;
+    EXPECT_NE(r.err.find(spec.string() + ": " + c.field + ":"), std::string::npos) << c.what << ": " << r.err;
+    EXPECT_TRUE(r.out.empty()) << c.what << ": " << r.out;
+    EXPECT_EQ(read_file(db), before) << c.what << " changed the database";
+  }
+}
+
+// Resume is refused when the spec under a stored name has changed; run settings may change.
+TEST(CampaignSpecErrors, ChangedSpecUnderSameNameIsRefused) {
+  const fs::path dir = test_dir();
+  const fs::path db = dir / "study.db";
+  write_file(dir / "a.json", test_spec("same-name", 3, 0.0));
+  ASSERT_EQ(run(flume({"campaign", "run", (dir / "a.json").string(), "--db", db.string()}), dir).rc, 0);
+  const std::string before = read_file(db);
+  write_file(dir / "b.json", test_spec("same-name", 4, 0.0));
+  const Result r = run(flume({"campaign", "run", (dir / "b.json").string(), "--db", db.string()}), dir);
+  EXPECT_EQ(r.rc, 2);
+  EXPECT_NE(r.err.find("different spec"), std::string::npos) << r.err;
+  EXPECT_EQ(read_file(db), before);
+  // A longer time limit is not a different campaign: the finished campaign resumes as a no-op.
+  std::string longer = test_spec("same-name", 3, 0.0);
+  longer.replace(longer.find("\"time_limit_s\": 60"), 18, "\"time_limit_s\": 90");
+  write_file(dir / "c.json", longer);
+  const Result c = run(flume({"campaign", "run", (dir / "c.json").string(), "--db", db.string()}), dir);
+  EXPECT_EQ(c.rc, 0) << c.err;
+  EXPECT_NE(c.out.find("3 finished, 0 to run"), std::string::npos) << c.out;
+}
+
+TEST(CampaignExport, CsvHasOneRowPerRunWithParametersAndMetrics) {
+  const fs::path dir = test_dir();
+  const fs::path db = dir / "study.db";
+  write_file(dir / "a.json", test_spec("export", 5, 0.0));
+  ASSERT_EQ(run(flume({"campaign", "run", (dir / "a.json").string(), "--db", db.string(), "--workers", "2"}), dir).rc, 0);
+  const Result e = run(flume({"campaign", "export", "--db", db.string(), "--csv", (dir / "out.csv").string()}), dir);
+  ASSERT_EQ(e.rc, 0) << e.err;
+  std::istringstream csv(read_file(dir / "out.csv"));
+  std::string header, line;
+  std::getline(csv, header);
+  EXPECT_EQ(header.rfind("campaign,design_index,run,status,message,x,y,", 0), 0u) << header;
+  int rows = 0;
+  while (std::getline(csv, line)) {
+    ++rows;
+    // x and y columns: the test model's y equals x here.
+    std::vector<std::string> f;
+    std::stringstream ls(line);
+    for (std::string cell; std::getline(ls, cell, ',');) f.push_back(cell);
+    ASSERT_GE(f.size(), 7u);
+    EXPECT_EQ(f[3], "ok");
+    EXPECT_DOUBLE_EQ(std::stod(f[5]), std::stod(f[6]));
+  }
+  EXPECT_EQ(rows, 5);
+}
