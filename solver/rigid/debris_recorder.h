@@ -52,7 +52,7 @@ class DebrisRecorder {
   struct Sample {
     double t = 0.0;
     Eigen::Vector3d x, v, w;
-    Eigen::Quaterniond q;
+    RigidQuaternion q;
   };
   struct Track {
     std::string name;

@@ -16,6 +16,12 @@
 
 namespace flume {
 
+// Orientation quaternion (w, x, y, z). Unaligned on purpose: Eigen aligns Quaterniond to 16 or 32 bytes depending
+// on the SIMD flags a file is compiled with, so the layout of a struct holding one would differ between, say,
+// this library (-march=native) and a CUDA host file (no -march); DontAlign makes the layout the same everywhere.
+// Converts to and from Eigen::Quaterniond implicitly.
+using RigidQuaternion = Eigen::Quaternion<double, Eigen::DontAlign>;
+
 // Coulomb friction and restitution for the two kinds of contact pair. Bullet's default combine rule (product of
 // the two bodies' values) cannot express these, so RigidWorld sets each pair's values itself.
 // The paper's Table 2 ranges: friction 0.15-0.80 (flume) and 0.05-0.80 (debris), restitution 0.30-0.60 (flume)
@@ -35,14 +41,14 @@ struct RigidBoxSpec {
   double mass = 0.0;     // kg; when 0, mass = density * volume
   double density = 0.0;  // kg/m^3, used only when mass is 0
   Eigen::Vector3d position = Eigen::Vector3d::Zero();                  // centre (of mass), m
-  Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();     // body -> world, (w, x, y, z)
+  RigidQuaternion orientation = RigidQuaternion::Identity();           // body -> world, (w, x, y, z)
   Eigen::Vector3d velocity = Eigen::Vector3d::Zero();                  // m/s
   Eigen::Vector3d angular_velocity = Eigen::Vector3d::Zero();          // rad/s, world frame
 };
 
 struct BodyState {
   Eigen::Vector3d position;      // centre of mass, m
-  Eigen::Quaterniond orientation;
+  RigidQuaternion orientation;   // body -> world
   Eigen::Matrix3d rotation;      // body -> world
   Eigen::Vector3d velocity;
   Eigen::Vector3d angular_velocity;  // world frame
