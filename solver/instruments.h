@@ -1,0 +1,183 @@
+// Instruments: free-surface gauges, velocity probes, load cells and diagnostics, sampled at their rates.
+// Templated on the solver so they read its particle arrays directly, in its own precision.
+#pragma once
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "solver/scene.h"
+#include "solver/simulation.h"
+
+namespace flume {
+
+// Top of the solid under a horizontal position: the highest box top or upward-facing plane over it, or the
+// domain floor. A dry gauge reads this level, as a real gauge on a dry apron reads the apron.
+inline double ground_level(const Scene& s, const Vec3d& p) {
+  const int up = s.dimension - 1;
+  double z = s.domain_lo[up];
+  for (const auto& b : s.boundaries) {
+    const auto& sh = b.shape;
+    if (sh.type == ShapeType::kBox) {
+      bool over = true;
+      for (int d = 0; d < up; ++d) over &= p[d] >= sh.lo[d] && p[d] <= sh.hi[d];
+      if (over) z = std::max(z, sh.hi[up]);
+    } else if (sh.normal[up] > 0.5) {  // a floor-like plane
+      double h = sh.point[up];
+      for (int d = 0; d < up; ++d) h -= (p[d] - sh.point[d]) * sh.normal[d] / sh.normal[up];
+      z = std::max(z, h);
+    }
+  }
+  return z;
+}
+
+template <class Solver>
+class InstrumentSet {
+ public:
+  explicit InstrumentSet(const Scene& scene) : scene_(scene) {
+    const int D = scene.dimension;
+    for (const auto& g : scene.instruments.gauges) {
+      record_.gauges[g.name].components = 1;
+      gauges_.push_back({g.name, 1.0 / g.rate_hz, 0.0});
+      ground_.push_back(ground_level(scene, g.position));
+    }
+    for (const auto& p : scene.instruments.probes) {
+      record_.probes[p.name].components = D;
+      probes_.push_back({p.name, 1.0 / p.rate_hz, 0.0});
+    }
+    for (const auto& l : scene.instruments.loads) {
+      record_.loads[l.name].components = D;
+      loads_.push_back({l.name, 1.0 / l.rate_hz, 0.0});
+      for (size_t w = 0; w < scene.boundaries.size(); ++w)
+        if (scene.boundaries[w].name == l.boundary) load_wall_.push_back(w);
+      load_impulse_.push_back(std::vector<double>(D, 0.0));
+      load_since_.push_back(0.0);
+    }
+    diag_period_ = 1.0 / scene.instruments.diagnostics_rate_hz;
+    for (const char* k : {"time", "mass", "kinetic", "potential", "elastic", "total", "dt", "max_speed", "step"})
+      record_.diagnostics[k];
+  }
+
+  const Record& record() const { return record_; }
+
+  // Accumulates the impulse the water gave each load-cell boundary over the last step.
+  void add_impulses(const std::vector<double>& impulse_per_wall, double /*dt*/) {
+    const int D = scene_.dimension;
+    for (size_t k = 0; k < loads_.size(); ++k)
+      for (int d = 0; d < D; ++d) load_impulse_[k][d] += impulse_per_wall[load_wall_[k] * D + d];
+  }
+
+  // Samples every instrument whose next sample time has come (all of them when `force`).
+  void sample(const Solver& s, double t, double dt, bool force) {
+    const int D = scene_.dimension;
+    for (size_t k = 0; k < gauges_.size(); ++k)
+      if (due(gauges_[k], t, force)) {
+        auto& ts = record_.gauges[gauges_[k].name];
+        ts.time.push_back(t);
+        ts.values.push_back(gauge_elevation(s, scene_.instruments.gauges[k]) - scene_.instruments.gauges[k].datum);
+      }
+    for (size_t k = 0; k < probes_.size(); ++k)
+      if (due(probes_[k], t, force)) {
+        auto& ts = record_.probes[probes_[k].name];
+        ts.time.push_back(t);
+        double v[3];
+        probe_velocity(s, scene_.instruments.probes[k].position, v);
+        for (int d = 0; d < D; ++d) ts.values.push_back(v[d]);
+      }
+    for (size_t k = 0; k < loads_.size(); ++k)
+      if (due(loads_[k], t, force)) {
+        auto& ts = record_.loads[loads_[k].name];
+        const double span = t - load_since_[k];
+        ts.time.push_back(t);
+        // The mean force over the sampling interval (impulse / time), so no impact between samples is lost.
+        for (int d = 0; d < D; ++d) ts.values.push_back(span > 0 ? load_impulse_[k][d] / span : 0.0);
+        std::fill(load_impulse_[k].begin(), load_impulse_[k].end(), 0.0);
+        load_since_[k] = t;
+      }
+    Clock diag{"", diag_period_, next_diag_};
+    if (due(diag, t, force)) {
+      next_diag_ = diag.next;
+      auto e = t == 0 ? s.energy() : s.last_energy();
+      auto& r = record_.diagnostics;
+      r["time"].push_back(t);
+      r["mass"].push_back(s.particle_mass() * s.n());
+      r["kinetic"].push_back(e.kinetic);
+      r["potential"].push_back(e.potential);
+      r["elastic"].push_back(e.elastic);
+      r["total"].push_back(e.total());
+      r["dt"].push_back(dt);
+      r["max_speed"].push_back(s.max_speed());
+      r["step"].push_back(static_cast<double>(s.steps()));
+    }
+  }
+
+ private:
+  struct Clock {
+    std::string name;
+    double period;
+    double next;
+  };
+  static bool due(Clock& c, double t, bool force) {
+    if (!force && t + 1e-12 < c.next) return false;
+    while (c.next <= t + 1e-12) c.next += c.period;
+    return true;
+  }
+
+  // Free-surface elevation: the top of the water column that rises without a gap from the ground under the
+  // gauge, within half a cell of the gauge's horizontal position. Spray above a gap is not water level.
+  double gauge_elevation(const Solver& s, const Gauge& g) {
+    const int D = s.dim();
+    const int up = D - 1;
+    const double half = 0.5 * scene_.solver.dx;
+    column_.clear();
+    for (size_t i = 0; i < s.n(); ++i) {
+      bool in = true;
+      for (int d = 0; d < up && in; ++d) in = std::fabs(double(s.x(d, i)) - g.position[d]) <= half;
+      if (in) column_.push_back(double(s.x(up, i)));
+    }
+    const size_t k = static_cast<size_t>(&g - scene_.instruments.gauges.data());
+    const double ground = ground_[k];
+    const double h = s.particle_spacing();
+    if (column_.empty()) return ground;
+    std::sort(column_.begin(), column_.end());
+    if (column_.front() > ground + 2.0 * h + 0.5 * scene_.solver.dx) return ground;  // spray over a dry bed
+    double top = column_.front();
+    for (size_t i = 1; i < column_.size(); ++i) {
+      if (column_[i] - top > 2.0 * h + 1e-12) break;
+      top = column_[i];
+    }
+    return std::max(ground, top + 0.5 * h);  // a particle stands for the water half a spacing above it
+  }
+
+  // Velocity at a point: particles within the quadratic B-spline support (1.5 dx), weighted by it. NaN when
+  // no water is there (a dry probe has no velocity).
+  void probe_velocity(const Solver& s, const Vec3d& p, double* v) const {
+    const int D = s.dim();
+    const double inv_dx = 1.0 / scene_.solver.dx;
+    double wsum = 0, acc[3] = {0, 0, 0};
+    for (size_t i = 0; i < s.n(); ++i) {
+      double w = 1;
+      for (int d = 0; d < D && w > 0; ++d) {
+        const double r = std::fabs(double(s.x(d, i)) - p[d]) * inv_dx;
+        w *= r < 0.5 ? 0.75 - r * r : (r < 1.5 ? 0.5 * (1.5 - r) * (1.5 - r) : 0.0);
+      }
+      if (w <= 0) continue;
+      wsum += w;
+      for (int d = 0; d < D; ++d) acc[d] += w * double(s.v(d, i));
+    }
+    for (int d = 0; d < D; ++d) v[d] = wsum > 0 ? acc[d] / wsum : std::numeric_limits<double>::quiet_NaN();
+  }
+
+  const Scene& scene_;
+  Record record_;
+  std::vector<Clock> gauges_, probes_, loads_;
+  std::vector<double> ground_;
+  std::vector<size_t> load_wall_;
+  std::vector<std::vector<double>> load_impulse_;
+  std::vector<double> load_since_;
+  double diag_period_ = 0.01, next_diag_ = 0;
+  std::vector<double> column_;
+};
+
+}  // namespace flume

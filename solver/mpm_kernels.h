@@ -1,0 +1,175 @@
+// The MPM physics, written once as small inline functions that both backends call: the OpenMP loops in
+// mpm_solver.cpp and the CUDA kernels in cuda/. Nothing here allocates, branches on the backend or knows
+// about the grid's storage. Quadratic B-splines and MLS-MPM transfers follow Hu et al. (2018), "A moving
+// least squares material point method", eqs. 16-29; the fluid is the weakly compressible Tait/Murnaghan
+// water of the comparative study (Bonus et al., section 4.1) with a Newtonian viscous stress.
+#pragma once
+#include <cmath>
+
+#if defined(__CUDACC__)
+#define FLUME_HD __host__ __device__ __forceinline__
+#else
+#define FLUME_HD inline __attribute__((always_inline))
+#endif
+
+namespace flume::mpm {
+
+// Tile geometry: grid blocks are kBlock^D nodes. A block of particles scatters into a tile covering
+// nodes [kBlock*B - 1, kBlock*B - 1 + kTile) on each axis: the quadratic stencil of a particle whose base
+// node has drifted at most one cell from its block since the last sort.
+constexpr int kBlock = 4;
+constexpr int kTile = kBlock + 4;
+
+template <int D>
+struct Pow {
+  static constexpr int of(int n) { return n * Pow<D - 1>::of(n); }
+};
+template <>
+struct Pow<0> {
+  static constexpr int of(int) { return 1; }
+};
+
+// Quadratic B-spline weights of the three nodes base, base+1, base+2 for a particle at fractional
+// position f = x/dx - base, f in [0.5, 1.5) (Hu et al. 2018, eq. 6 of the supplementary).
+template <typename T>
+FLUME_HD void bspline_weights(T f, T w[3]) {
+  const T a = T(1.5) - f, b = f - T(1), c = f - T(0.5);
+  w[0] = T(0.5) * a * a;
+  w[1] = T(0.75) - b * b;
+  w[2] = T(0.5) * c * c;
+}
+
+// Base node of a particle's stencil and its fractional offset, from the position in grid units.
+template <typename T>
+FLUME_HD int stencil_base(T x_grid, T& f) {
+  const int base = static_cast<int>(std::floor(x_grid - T(0.5)));
+  f = x_grid - T(base);
+  return base;
+}
+
+// Tait/Murnaghan pressure from the volume ratio J: p = K/gamma (J^-gamma - 1).
+template <typename T>
+FLUME_HD T tait_pressure(T J, T bulk_modulus, T gamma) {
+  return bulk_modulus / gamma * (std::pow(J, -gamma) - T(1));
+}
+
+// Stored energy per unit reference volume whose derivative is -p: W(J) = K/gamma [(J^(1-g) - 1)/(g - 1) + J - 1].
+// Used by the energy audit that flags an unstable run. gamma = 1 is the limit K (J - 1 - ln J).
+template <typename T>
+FLUME_HD T tait_energy_density(T J, T bulk_modulus, T gamma) {
+  if (std::fabs(gamma - T(1)) < T(1e-6)) return bulk_modulus * (J - T(1) - std::log(J));
+  return bulk_modulus / gamma * ((std::pow(J, T(1) - gamma) - T(1)) / (gamma - T(1)) + J - T(1));
+}
+
+// Wave speed of the linearised fluid, c = sqrt(K / rho), which sets the explicit step.
+template <typename T>
+FLUME_HD T sound_speed(T bulk_modulus, T density) {
+  return std::sqrt(bulk_modulus / density);
+}
+
+// Cauchy stress of the fluid: -p I + 2 mu dev(sym(grad v)), with grad v taken from the APIC matrix C
+// (for quadratic MLS-MPM, C is the velocity gradient estimate). Row-major D x D.
+template <int D, typename T>
+FLUME_HD void fluid_stress(T J, const T* C, T bulk_modulus, T gamma, T viscosity, T* sigma) {
+  const T p = tait_pressure(J, bulk_modulus, gamma);
+  T trace = 0;
+  for (int a = 0; a < D; ++a) trace += C[a * D + a];
+  for (int a = 0; a < D; ++a)
+    for (int b = 0; b < D; ++b) {
+      const T sym = T(0.5) * (C[a * D + b] + C[b * D + a]);
+      sigma[a * D + b] = T(2) * viscosity * (sym - (a == b ? trace / T(D) : T(0))) - (a == b ? p : T(0));
+    }
+}
+
+// det(I + dt C): the particle's volume change over one step.
+template <int D, typename T>
+FLUME_HD T volume_ratio(const T* C, T dt) {
+  if constexpr (D == 2) {
+    const T a = T(1) + dt * C[0], b = dt * C[1], c = dt * C[2], d = T(1) + dt * C[3];
+    return a * d - b * c;
+  } else {
+    const T m0 = T(1) + dt * C[0], m1 = dt * C[1], m2 = dt * C[2];
+    const T m3 = dt * C[3], m4 = T(1) + dt * C[4], m5 = dt * C[5];
+    const T m6 = dt * C[6], m7 = dt * C[7], m8 = T(1) + dt * C[8];
+    return m0 * (m4 * m8 - m5 * m7) - m1 * (m3 * m8 - m5 * m6) + m2 * (m3 * m7 - m4 * m6);
+  }
+}
+
+// J-bar antilocking with the linear mixing ratio psi (Bonus et al., eqs. 3-4): the new J blends the
+// grid-averaged J (Zhao et al. 2023's projection, taken from the previous step's particle J and carried
+// forward by this step's dJ) with the particle's own J dJ. psi = 0 is plain MLS-MPM.
+template <typename T>
+FLUME_HD T jbar_update(T J_particle, T J_grid_average, T dJ, T psi) {
+  return (psi * J_grid_average + (T(1) - psi) * J_particle) * dJ;
+}
+
+// Boundary projection of a grid-node velocity (paper eq. 2). n is the outward normal of the solid (into
+// the fluid), vb the boundary's velocity. Separate: only motion into the solid is removed, and the
+// tangential slip is reduced by Coulomb friction mu |v_n| (Hu et al. 2018's separable friction).
+enum class Bc : int { kSticky = 0, kSlip = 1, kSeparate = 2 };
+
+template <int D, typename T>
+FLUME_HD void project_velocity(T* v, const T* n, const T* vb, Bc bc, T mu) {
+  T vr[D];
+  T vn = 0;
+  for (int a = 0; a < D; ++a) {
+    vr[a] = v[a] - vb[a];
+    vn += vr[a] * n[a];
+  }
+  if (bc == Bc::kSticky) {
+    for (int a = 0; a < D; ++a) v[a] = vb[a];
+    return;
+  }
+  if (bc == Bc::kSeparate && vn >= T(0)) return;  // leaving the wall: free
+  T vt[D];
+  T vt_norm2 = 0;
+  for (int a = 0; a < D; ++a) {
+    vt[a] = vr[a] - vn * n[a];
+    vt_norm2 += vt[a] * vt[a];
+  }
+  T scale = T(1);
+  if (bc == Bc::kSeparate && mu > T(0) && vt_norm2 > T(0)) {
+    const T vt_norm = std::sqrt(vt_norm2);
+    scale = vt_norm + mu * vn > T(0) ? (vt_norm + mu * vn) / vt_norm : T(0);  // vn < 0 here
+  }
+  for (int a = 0; a < D; ++a) v[a] = vb[a] + scale * vt[a];
+}
+
+// Signed distance and outward normal of an axis-aligned solid box [lo, hi] (negative inside).
+template <int D, typename T>
+FLUME_HD T box_distance(const T* x, const T* lo, const T* hi, T* normal) {
+  T outside2 = 0, inside = -T(1e30);
+  int inside_axis = 0;
+  T inside_sign = 1;
+  T out_dir[D];
+  for (int a = 0; a < D; ++a) {
+    const T below = lo[a] - x[a], above = x[a] - hi[a];
+    const T q = below > above ? below : above;
+    out_dir[a] = below > 0 ? -below : (above > 0 ? above : T(0));
+    if (q > 0) outside2 += q * q;
+    if (q > inside) {
+      inside = q;
+      inside_axis = a;
+      inside_sign = below > above ? T(-1) : T(1);
+    }
+  }
+  if (outside2 > 0) {
+    const T d = std::sqrt(outside2);
+    for (int a = 0; a < D; ++a) normal[a] = out_dir[a] / d;
+    return d;
+  }
+  for (int a = 0; a < D; ++a) normal[a] = a == inside_axis ? inside_sign : T(0);
+  return inside;
+}
+
+template <int D, typename T>
+FLUME_HD T half_space_distance(const T* x, const T* point, const T* n, T* normal) {
+  T d = 0;
+  for (int a = 0; a < D; ++a) {
+    d += (x[a] - point[a]) * n[a];
+    normal[a] = n[a];
+  }
+  return d;
+}
+
+}  // namespace flume::mpm

@@ -1,0 +1,809 @@
+// The CPU (OpenMP) backend of the MLS-MPM solver on a block-sparse grid.
+//
+// Layout. Particles are stored as structure-of-arrays and kept sorted by the grid block that holds their
+// stencil's base node. Only grid blocks within one block of a particle block exist, so memory and work
+// follow the water, not the domain box.
+//
+// Race-free scatter by design. Each particle block scatters (P2G) into its own tile of kTile^D nodes, a
+// private buffer no other thread touches; each grid block then gathers the overlapping parts of the tiles
+// of its 3^D neighbouring particle blocks, in a fixed order. No atomics, and the result does not depend on
+// the number of threads. Particles may drift up to one cell from the block they were sorted into before a
+// re-sort is needed, which is what the tile's margin allows for.
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <numeric>
+#include <sstream>
+
+#include "common/errors.h"
+#include "solver/instruments.h"
+#include "solver/mpm_kernels.h"
+#include "solver/simulation.h"
+
+namespace flume {
+namespace {
+
+using mpm::kBlock;
+using mpm::kTile;
+
+constexpr int kPad = kBlock;  // nodes of padding below the domain, so every node index is non-negative
+
+template <int D>
+uint64_t pack_key(const int* b) {
+  uint64_t k = 0;
+  for (int d = 0; d < D; ++d) k = (k << 21) | static_cast<uint64_t>(b[d] & 0x1FFFFF);
+  return k;
+}
+template <int D>
+void unpack_key(uint64_t k, int* b) {
+  for (int d = D - 1; d >= 0; --d) {
+    b[d] = static_cast<int>(k & 0x1FFFFF);
+    k >>= 21;
+  }
+}
+
+std::string fmt_point(const double* x, int dim) {
+  std::ostringstream s;
+  s.precision(4);
+  s << "(";
+  for (int d = 0; d < dim; ++d) s << (d ? ", " : "") << x[d];
+  s << ") m";
+  return s.str();
+}
+
+template <int D, typename T>
+class MpmSolver final : public Simulation {
+  static constexpr int kNodes = mpm::Pow<D>::of(kBlock);
+  static constexpr int kTileNodes = mpm::Pow<D>::of(kTile);
+  static constexpr int kNbr = mpm::Pow<D>::of(3);
+  static constexpr int kChannels = D + 2;  // mass, momentum (D), mass-weighted J
+
+ public:
+  MpmSolver(const Scene& scene, const SimulationOptions& options)
+      : scene_(scene), instruments_(scene_) {
+    if (options.threads > 0) omp_set_num_threads(options.threads);
+    dx_ = scene.solver.dx;
+    inv_dx_ = T(1) / T(dx_);
+    for (int d = 0; d < D; ++d) {
+      grid_lo_[d] = scene.domain_lo[d] - kPad * dx_;
+      gravity_[d] = T(scene.solver.gravity[d]);
+    }
+    const auto& f = scene.fluid;
+    K_ = T(f.bulk_modulus);
+    gamma_ = T(f.gamma);
+    mu_ = T(f.viscosity);
+    psi_ = T(f.jbar_psi);
+    c_ = mpm::sound_speed(f.bulk_modulus, f.density);
+    seed_particles();
+    setup_boundaries();
+    sort_particles();
+    const Energy e = energy();
+    energy0_ = e.total();
+    // Slack for the energy audit: MPM dissipates, so the total may only grow by round-off and by the
+    // compression work of the initial loading. 1% of the larger of the initial kinetic energy and the
+    // potential energy of lifting all the water by its own height bounds those by a wide margin, and an
+    // explicit-step blow-up grows exponentially, far past it within a few steps.
+    double zmin = 1e300, zmax = -1e300;
+    for (const auto& w : scene.water) {
+      zmin = std::min(zmin, w.lo[D - 1]);
+      zmax = std::max(zmax, w.hi[D - 1]);
+    }
+    double g = 0;
+    for (int d = 0; d < D; ++d) g += scene.solver.gravity[d] * scene.solver.gravity[d];
+    energy_slack_ = 0.01 * std::max({e.kinetic, mass_ * std::sqrt(g) * (zmax - zmin), 1e-12});
+    instruments_.sample(*this, 0.0, 0.0, true);
+  }
+
+  RunStatus step() override {
+    if (status_ != RunStatus::kRunning) return status_;
+    double dt = std::min(scene_.solver.max_dt, scene_.solver.cfl * dx_ / (c_ + max_speed_));
+    const double remaining = scene_.solver.end_time - time_;
+    if (dt >= remaining) dt = remaining;
+    if (!(dt > 0)) {
+      status_ = RunStatus::kOk;
+      return status_;
+    }
+    if (needs_sort_) sort_particles();
+    p2g(T(dt));
+    grid_update(T(dt));
+    g2p(T(dt));
+    time_ += dt;
+    dt_ = dt;
+    ++steps_;
+    if (status_ == RunStatus::kUnstable) {
+      instruments_.sample(*this, time_, dt, true);
+      return status_;
+    }
+    instruments_.add_impulses(load_impulse_, dt);
+    instruments_.sample(*this, time_, dt, false);
+    if (time_ >= scene_.solver.end_time - 1e-12) status_ = RunStatus::kOk;
+    return status_;
+  }
+
+  double time() const override { return time_; }
+  double last_dt() const override { return dt_; }
+  long steps() const override { return steps_; }
+  size_t particle_count() const override { return n_; }
+  double total_mass() const override { return mass_; }
+  const Record& record() const override { return instruments_.record(); }
+  const std::string& message() const override { return message_; }
+
+  void particle_positions(std::vector<double>& xyz) const override {
+    xyz.assign(3 * n_, 0.0);
+    for (size_t i = 0; i < n_; ++i)
+      for (int d = 0; d < D; ++d) xyz[3 * i + d] = x_[d][i];
+  }
+  void particle_velocities(std::vector<double>& vel) const override {
+    vel.assign(3 * n_, 0.0);
+    for (size_t i = 0; i < n_; ++i)
+      for (int d = 0; d < D; ++d) vel[3 * i + d] = v_[d][i];
+  }
+  void particle_pressures(std::vector<double>& p) const override {
+    p.resize(n_);
+    for (size_t i = 0; i < n_; ++i) p[i] = mpm::tait_pressure(J_[i], K_, gamma_);
+  }
+  size_t grid_bytes() const override {
+    size_t b = (gm_.capacity() + gJ_.capacity()) * sizeof(T) + tiles_.capacity() * sizeof(T);
+    for (int d = 0; d < D; ++d) b += gv_[d].capacity() * sizeof(T);
+    b += (gkeys_.capacity() + pkeys_.capacity()) * sizeof(uint64_t);
+    b += (p_nbr_.capacity() + g_nbr_.capacity() + g_bnd_.capacity()) * sizeof(int32_t);
+    return b;
+  }
+  size_t active_blocks() const override { return gkeys_.size(); }
+  size_t particle_bytes() const override { return n_ * sizeof(T) * (2 * D + D * D + 1); }
+
+  void momentum(double linear[3], double angular[3]) const override {
+    double L[3] = {0, 0, 0}, A[3] = {0, 0, 0};
+    for (size_t i = 0; i < n_; ++i) {
+      double x[3] = {0, 0, 0}, v[3] = {0, 0, 0};
+      for (int d = 0; d < D; ++d) {
+        x[d] = x_[d][i];
+        v[d] = v_[d][i];
+      }
+      for (int d = 0; d < 3; ++d) L[d] += mp_ * v[d];
+      // Particle angular momentum: x cross m v plus the APIC spin term m * (dx^2/4) * axial(C - C^T) / ...
+      // (Jiang et al. 2015, eq. 26: L_p = x_p x m v_p + m (D_p B_p^T : epsilon)); for quadratic splines
+      // B_p = C_p D_p with D_p = dx^2/4 I, so the spin part is m dx^2/4 * (C^T - C) axial.
+      const double s = mp_ * dx_ * dx_ / 4.0;
+      if constexpr (D == 3) {
+        A[0] += mp_ * (x[1] * v[2] - x[2] * v[1]) + s * (C_[5][i] - C_[7][i]);
+        A[1] += mp_ * (x[2] * v[0] - x[0] * v[2]) + s * (C_[6][i] - C_[2][i]);
+        A[2] += mp_ * (x[0] * v[1] - x[1] * v[0]) + s * (C_[1][i] - C_[3][i]);
+      } else {
+        A[2] += mp_ * (x[0] * v[1] - x[1] * v[0]) + s * (C_[1][i] - C_[2][i]);
+      }
+    }
+    for (int d = 0; d < 3; ++d) {
+      linear[d] = L[d];
+      angular[d] = A[d];
+    }
+  }
+
+  void set_rigid_velocity(const double v0[3], const double omega[3], const double centre[3]) override {
+    for (size_t i = 0; i < n_; ++i) {
+      double r[3] = {0, 0, 0};
+      for (int d = 0; d < D; ++d) r[d] = x_[d][i] - centre[d];
+      if constexpr (D == 3) {
+        v_[0][i] = T(v0[0] + omega[1] * r[2] - omega[2] * r[1]);
+        v_[1][i] = T(v0[1] + omega[2] * r[0] - omega[0] * r[2]);
+        v_[2][i] = T(v0[2] + omega[0] * r[1] - omega[1] * r[0]);
+        // The affine field of a rigid rotation: C = [omega]_x.
+        const double W[9] = {0, -omega[2], omega[1], omega[2], 0, -omega[0], -omega[1], omega[0], 0};
+        for (int k = 0; k < 9; ++k) C_[k][i] = T(W[k]);
+      } else {
+        v_[0][i] = T(v0[0] - omega[2] * r[1]);
+        v_[1][i] = T(v0[1] + omega[2] * r[0]);
+        const double W[4] = {0, -omega[2], omega[2], 0};
+        for (int k = 0; k < 4; ++k) C_[k][i] = T(W[k]);
+      }
+    }
+    max_speed_ = 0;
+    for (size_t i = 0; i < n_; ++i) {
+      double s2 = 0;
+      for (int d = 0; d < D; ++d) s2 += double(v_[d][i]) * v_[d][i];
+      max_speed_ = std::max(max_speed_, std::sqrt(s2));
+    }
+    energy0_ = energy().total();
+    double ke = energy().kinetic;
+    energy_slack_ = std::max(energy_slack_, 0.01 * ke);
+  }
+
+  // --- read access for the instruments ---
+  int dim() const { return D; }
+  size_t n() const { return n_; }
+  T x(int d, size_t i) const { return x_[d][i]; }
+  T v(int d, size_t i) const { return v_[d][i]; }
+  double particle_spacing() const { return spacing_; }
+  double particle_mass() const { return mp_; }
+  double max_speed() const { return max_speed_; }
+
+  struct Energy {
+    double kinetic = 0, potential = 0, elastic = 0;
+    double total() const { return kinetic + potential + elastic; }
+  };
+  Energy energy() const {
+    double ke = 0, pe = 0, el = 0;
+#pragma omp parallel for reduction(+ : ke, pe, el) schedule(static)
+    for (size_t i = 0; i < n_; ++i) {
+      double v2 = 0, gx = 0;
+      for (int d = 0; d < D; ++d) {
+        v2 += double(v_[d][i]) * v_[d][i];
+        gx += double(gravity_[d]) * x_[d][i];
+      }
+      ke += 0.5 * mp_ * v2;
+      pe -= mp_ * gx;
+      el += v0_ * mpm::tait_energy_density(double(J_[i]), double(K_), double(gamma_));
+    }
+    return {ke, pe, el};
+  }
+
+ private:
+  void seed_particles() {
+    const int per_axis = static_cast<int>(std::lround(std::pow(scene_.solver.ppc, 1.0 / D)));
+    spacing_ = dx_ / per_axis;
+    v0_ = std::pow(spacing_, D);
+    mp_ = scene_.fluid.density * v0_;
+    std::vector<double> pos[D];
+    for (size_t w = 0; w < scene_.water.size(); ++w) {
+      const auto& box = scene_.water[w];
+      long count[D];
+      for (int d = 0; d < D; ++d) count[d] = std::max(1L, std::lround((box.hi[d] - box.lo[d]) / spacing_));
+      long total = 1;
+      for (int d = 0; d < D; ++d) total *= count[d];
+      for (long k = 0; k < total; ++k) {
+        long r = k;
+        double p[D];
+        for (int d = D - 1; d >= 0; --d) {
+          const long idx = r % count[d];
+          r /= count[d];
+          p[d] = box.lo[d] + (idx + 0.5) * (box.hi[d] - box.lo[d]) / count[d];
+        }
+        // Overlapping water boxes would double the water: keep a point only for its first box.
+        bool dup = false;
+        for (size_t u = 0; u < w && !dup; ++u) {
+          bool in = true;
+          for (int d = 0; d < D; ++d) in &= p[d] >= scene_.water[u].lo[d] && p[d] < scene_.water[u].hi[d];
+          dup = in;
+        }
+        if (dup) continue;
+        for (int d = 0; d < D; ++d) pos[d].push_back(p[d]);
+      }
+    }
+    n_ = pos[0].size();
+    for (int d = 0; d < D; ++d) {
+      x_[d].assign(pos[d].begin(), pos[d].end());
+      v_[d].assign(n_, T(0));
+    }
+    for (int k = 0; k < D * D; ++k) C_[k].assign(n_, T(0));
+    J_.assign(n_, T(1));
+    mass_ = mp_ * n_;
+  }
+
+  void setup_boundaries() {
+    for (const auto& b : scene_.boundaries) {
+      Wall w;
+      w.box = b.shape.type == ShapeType::kBox;
+      for (int d = 0; d < D; ++d) {
+        w.a[d] = T(w.box ? b.shape.lo[d] : b.shape.point[d]);
+        w.b[d] = T(w.box ? b.shape.hi[d] : b.shape.normal[d]);
+        w.vb[d] = T(b.velocity[d]);
+      }
+      w.bc = static_cast<mpm::Bc>(static_cast<int>(b.condition));
+      w.mu = T(b.friction);
+      walls_.push_back(w);
+    }
+    domain_bc_ = static_cast<mpm::Bc>(static_cast<int>(scene_.domain_walls));
+    domain_mu_ = T(scene_.domain_wall_friction);
+    load_impulse_.assign(walls_.size() * D, 0.0);
+  }
+
+  int base_node(T x_grid) const { return static_cast<int>(std::floor(x_grid - T(0.5))); }
+
+  // Bins particles by the block of their stencil's base node and rebuilds the sparse block lists.
+  void sort_particles() {
+    std::vector<uint64_t> key(n_);
+#pragma omp parallel for schedule(static)
+    for (size_t i = 0; i < n_; ++i) {
+      int b[D];
+      for (int d = 0; d < D; ++d) {
+        const int node = base_node((x_[d][i] - T(grid_lo_[d])) * inv_dx_);
+        b[d] = node >= 0 ? node / kBlock : 0;
+      }
+      key[i] = pack_key<D>(b);
+    }
+    std::vector<uint32_t> order(n_);
+    std::iota(order.begin(), order.end(), 0u);
+    if (!std::is_sorted(key.begin(), key.end())) {
+      std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return key[a] < key[b]; });
+      auto permute = [&](std::vector<T>& a) {
+        std::vector<T> tmp(n_);
+#pragma omp parallel for schedule(static)
+        for (size_t i = 0; i < n_; ++i) tmp[i] = a[order[i]];
+        a.swap(tmp);
+      };
+      for (int d = 0; d < D; ++d) {
+        permute(x_[d]);
+        permute(v_[d]);
+      }
+      for (int k = 0; k < D * D; ++k) permute(C_[k]);
+      permute(J_);
+      std::vector<uint64_t> sorted(n_);
+      for (size_t i = 0; i < n_; ++i) sorted[i] = key[order[i]];
+      key.swap(sorted);
+    }
+    // Particle blocks and their particle ranges.
+    pkeys_.clear();
+    pstart_.clear();
+    for (size_t i = 0; i < n_; ++i)
+      if (i == 0 || key[i] != key[i - 1]) {
+        pkeys_.push_back(key[i]);
+        pstart_.push_back(static_cast<uint32_t>(i));
+      }
+    pstart_.push_back(static_cast<uint32_t>(n_));
+    // Grid blocks: the 3^D neighbourhood of every particle block.
+    std::vector<uint64_t> g;
+    g.reserve(pkeys_.size() * kNbr);
+    for (uint64_t k : pkeys_) {
+      int b[D];
+      unpack_key<D>(k, b);
+      for (int o = 0; o < kNbr; ++o) {
+        int nb[D];
+        neighbour(b, o, nb);
+        g.push_back(pack_key<D>(nb));
+      }
+    }
+    std::sort(g.begin(), g.end());
+    g.erase(std::unique(g.begin(), g.end()), g.end());
+    gkeys_.swap(g);
+    auto find = [](const std::vector<uint64_t>& v, uint64_t k) -> int32_t {
+      auto it = std::lower_bound(v.begin(), v.end(), k);
+      return it != v.end() && *it == k ? static_cast<int32_t>(it - v.begin()) : -1;
+    };
+    p_nbr_.assign(pkeys_.size() * kNbr, -1);
+    g_nbr_.assign(gkeys_.size() * kNbr, -1);
+#pragma omp parallel for schedule(static)
+    for (size_t p = 0; p < pkeys_.size(); ++p) {
+      int b[D];
+      unpack_key<D>(pkeys_[p], b);
+      for (int o = 0; o < kNbr; ++o) {
+        int nb[D];
+        neighbour(b, o, nb);
+        p_nbr_[p * kNbr + o] = find(gkeys_, pack_key<D>(nb));
+      }
+    }
+#pragma omp parallel for schedule(static)
+    for (size_t gi = 0; gi < gkeys_.size(); ++gi) {
+      int b[D];
+      unpack_key<D>(gkeys_[gi], b);
+      for (int o = 0; o < kNbr; ++o) {
+        int nb[D];
+        neighbour(b, o, nb);
+        g_nbr_[gi * kNbr + o] = find(pkeys_, pack_key<D>(nb));
+      }
+    }
+    // Boundaries that can reach each grid block (so the grid update tests only those).
+    g_bnd_start_.assign(gkeys_.size() + 1, 0);
+    g_bnd_.clear();
+    for (size_t gi = 0; gi < gkeys_.size(); ++gi) {
+      int b[D];
+      unpack_key<D>(gkeys_[gi], b);
+      T centre[D];
+      T half_diag = 0;
+      for (int d = 0; d < D; ++d) {
+        centre[d] = T(grid_lo_[d] + (b[d] * kBlock + 0.5 * (kBlock - 1)) * dx_);
+        half_diag += T(0.25 * (kBlock * dx_) * (kBlock * dx_));
+      }
+      half_diag = std::sqrt(half_diag);
+      for (size_t w = 0; w < walls_.size(); ++w) {
+        T n[D];
+        if (wall_distance(walls_[w], centre, n) <= half_diag + T(dx_)) g_bnd_.push_back(static_cast<int32_t>(w));
+      }
+      g_bnd_start_[gi + 1] = static_cast<uint32_t>(g_bnd_.size());
+    }
+    const size_t nodes = gkeys_.size() * kNodes;
+    gm_.resize(nodes);
+    gJ_.resize(nodes);
+    for (int d = 0; d < D; ++d) gv_[d].resize(nodes);
+    tiles_.resize(pkeys_.size() * kChannels * kTileNodes);
+    needs_sort_ = false;
+  }
+
+  // The o-th of the 3^D neighbours of block b (offsets -1, 0, +1 per axis, last axis fastest).
+  static void neighbour(const int* b, int o, int* nb) {
+    for (int d = D - 1; d >= 0; --d) {
+      nb[d] = b[d] + (o % 3) - 1;
+      o /= 3;
+    }
+  }
+
+  struct Wall {
+    bool box = true;
+    T a[D], b[D];  // box: lo, hi; half-space: point, normal
+    T vb[D];
+    mpm::Bc bc = mpm::Bc::kSeparate;
+    T mu = 0;
+  };
+  T wall_distance(const Wall& w, const T* x, T* n) const {
+    return w.box ? mpm::box_distance<D>(x, w.a, w.b, n) : mpm::half_space_distance<D>(x, w.a, w.b, n);
+  }
+
+  static int tile_index(const int* a) {
+    int idx = 0;
+    for (int d = 0; d < D; ++d) idx = idx * kTile + a[d];
+    return idx;
+  }
+
+  // P2G: each particle block scatters mass, momentum (with the MLS-MPM stress term) and mass-weighted J
+  // into its private tile.
+  void p2g(T dt) {
+    const T dx = T(dx_);
+    const T m = T(mp_);
+    const T stress_scale = -dt * T(v0_) * T(4) * inv_dx_ * inv_dx_;
+    const long nblocks = static_cast<long>(pkeys_.size());
+#pragma omp parallel for schedule(dynamic, 4)
+    for (long p = 0; p < nblocks; ++p) {
+      T* tile = &tiles_[static_cast<size_t>(p) * kChannels * kTileNodes];
+      std::fill(tile, tile + kChannels * kTileNodes, T(0));
+      int blk[D], origin[D];
+      unpack_key<D>(pkeys_[p], blk);
+      for (int d = 0; d < D; ++d) origin[d] = blk[d] * kBlock - 1;
+      for (uint32_t i = pstart_[p]; i < pstart_[p + 1]; ++i) {
+        T w[D][3], f[D];
+        int rel[D];
+        for (int d = 0; d < D; ++d) {
+          const T xg = (x_[d][i] - T(grid_lo_[d])) * inv_dx_;
+          const int base = mpm::stencil_base(xg, f[d]);
+          rel[d] = base - origin[d];
+          mpm::bspline_weights(f[d], w[d]);
+        }
+        T Cp[D * D], sigma[D * D], A[D * D];
+        for (int k = 0; k < D * D; ++k) Cp[k] = C_[k][i];
+        const T J = J_[i];
+        mpm::fluid_stress<D>(J, Cp, K_, gamma_, mu_, sigma);
+        for (int k = 0; k < D * D; ++k) A[k] = stress_scale * J * sigma[k] + m * Cp[k];
+        // Momentum carried to node (rel + off): m v + A (off - f) dx, split into a constant and a linear part.
+        T mom0[D];
+        for (int a = 0; a < D; ++a) {
+          T s = m * v_[a][i];
+          for (int b = 0; b < D; ++b) s -= A[a * D + b] * f[b] * dx;
+          mom0[a] = s;
+        }
+        const T mJ = m * J;
+        if constexpr (D == 2) {
+          for (int i0 = 0; i0 < 3; ++i0)
+            for (int i1 = 0; i1 < 3; ++i1) {
+              const T wt = w[0][i0] * w[1][i1];
+              const int node = (rel[0] + i0) * kTile + rel[1] + i1;
+              const T o0 = T(i0) * dx, o1 = T(i1) * dx;
+              tile[node] += wt * m;
+              tile[kTileNodes + node] += wt * (mom0[0] + A[0] * o0 + A[1] * o1);
+              tile[2 * kTileNodes + node] += wt * (mom0[1] + A[2] * o0 + A[3] * o1);
+              tile[3 * kTileNodes + node] += wt * mJ;
+            }
+        } else {
+          for (int i0 = 0; i0 < 3; ++i0)
+            for (int i1 = 0; i1 < 3; ++i1) {
+              const T w01 = w[0][i0] * w[1][i1];
+              const T o0 = T(i0) * dx, o1 = T(i1) * dx;
+              const T m0 = mom0[0] + A[0] * o0 + A[1] * o1;
+              const T m1 = mom0[1] + A[3] * o0 + A[4] * o1;
+              const T m2 = mom0[2] + A[6] * o0 + A[7] * o1;
+              const int row = ((rel[0] + i0) * kTile + rel[1] + i1) * kTile + rel[2];
+#pragma omp simd
+              for (int i2 = 0; i2 < 3; ++i2) {
+                const T wt = w01 * w[2][i2];
+                const T o2 = T(i2) * dx;
+                const int node = row + i2;
+                tile[node] += wt * m;
+                tile[kTileNodes + node] += wt * (m0 + A[2] * o2);
+                tile[2 * kTileNodes + node] += wt * (m1 + A[5] * o2);
+                tile[3 * kTileNodes + node] += wt * (m2 + A[8] * o2);
+                tile[4 * kTileNodes + node] += wt * mJ;
+              }
+            }
+        }
+      }
+    }
+  }
+
+  // Gathers the tiles into the grid blocks, then turns momentum into velocity, adds gravity and applies the
+  // boundary conditions. Load cells sum the impulse the boundary gives the water at its nodes.
+  void grid_update(T dt) {
+    const long ngb = static_cast<long>(gkeys_.size());
+    const int nthreads = omp_get_max_threads();
+    std::vector<double> impulse(static_cast<size_t>(nthreads) * walls_.size() * D, 0.0);
+#pragma omp parallel
+    {
+      double* my_impulse = impulse.data() + static_cast<size_t>(omp_get_thread_num()) * walls_.size() * D;
+#pragma omp for schedule(dynamic, 8)
+      for (long g = 0; g < ngb; ++g) {
+        T acc[kChannels][kNodes];
+        for (int c = 0; c < kChannels; ++c)
+          for (int k = 0; k < kNodes; ++k) acc[c][k] = T(0);
+        for (int o = 0; o < kNbr; ++o) {
+          const int32_t p = g_nbr_[g * kNbr + o];
+          if (p < 0) continue;
+          // Block offset of the particle block relative to this grid block, per axis.
+          int off[D];
+          for (int d = D - 1, r = o; d >= 0; --d, r /= 3) off[d] = -((r % 3) - 1);
+          // Local node range l and tile index a = l + 1 - 4*(-off) ... i.e. a = l + 1 + kBlock*off.
+          int lo[D], hi[D];
+          for (int d = 0; d < D; ++d) {
+            const int shift = 1 + kBlock * off[d];  // a = l + shift
+            lo[d] = std::max(0, -shift);
+            hi[d] = std::min(kBlock, kTile - shift);
+          }
+          const T* tile = &tiles_[static_cast<size_t>(p) * kChannels * kTileNodes];
+          if constexpr (D == 2) {
+            for (int l0 = lo[0]; l0 < hi[0]; ++l0)
+              for (int l1 = lo[1]; l1 < hi[1]; ++l1) {
+                const int a = (l0 + 1 + kBlock * off[0]) * kTile + l1 + 1 + kBlock * off[1];
+                const int k = l0 * kBlock + l1;
+                for (int c = 0; c < kChannels; ++c) acc[c][k] += tile[c * kTileNodes + a];
+              }
+          } else {
+            for (int l0 = lo[0]; l0 < hi[0]; ++l0)
+              for (int l1 = lo[1]; l1 < hi[1]; ++l1)
+                for (int l2 = lo[2]; l2 < hi[2]; ++l2) {
+                  const int a = ((l0 + 1 + kBlock * off[0]) * kTile + l1 + 1 + kBlock * off[1]) * kTile + l2 + 1 +
+                                kBlock * off[2];
+                  const int k = (l0 * kBlock + l1) * kBlock + l2;
+                  for (int c = 0; c < kChannels; ++c) acc[c][k] += tile[c * kTileNodes + a];
+                }
+          }
+        }
+        int blk[D];
+        unpack_key<D>(gkeys_[g], blk);
+        const size_t base = static_cast<size_t>(g) * kNodes;
+        for (int k = 0; k < kNodes; ++k) {
+          const T m = acc[0][k];
+          if (m <= T(0)) {
+            gm_[base + k] = T(0);
+            gJ_[base + k] = T(1);
+            for (int d = 0; d < D; ++d) gv_[d][base + k] = T(0);
+            continue;
+          }
+          T v[D], xn[D];
+          int node[D];
+          for (int d = D - 1, r = k; d >= 0; --d, r /= kBlock) node[d] = blk[d] * kBlock + r % kBlock;
+          for (int d = 0; d < D; ++d) {
+            v[d] = acc[1 + d][k] / m + dt * gravity_[d];
+            xn[d] = T(grid_lo_[d]) + T(node[d]) * T(dx_);
+          }
+          // Scene boundaries reaching this block.
+          for (uint32_t q = g_bnd_start_[g]; q < g_bnd_start_[g + 1]; ++q) {
+            const Wall& w = walls_[g_bnd_[q]];
+            T n[D];
+            if (wall_distance(w, xn, n) > T(0)) continue;
+            T before[D];
+            for (int d = 0; d < D; ++d) before[d] = v[d];
+            mpm::project_velocity<D>(v, n, w.vb, w.bc, w.mu);
+            for (int d = 0; d < D; ++d) my_impulse[g_bnd_[q] * D + d] += double(m) * (before[d] - v[d]);
+          }
+          // The domain box is a container: nodes on or beyond its faces are walls.
+          for (int d = 0; d < D; ++d) {
+            T n[D] = {};
+            if (xn[d] <= T(scene_.domain_lo[d])) {
+              n[d] = T(1);
+            } else if (xn[d] >= T(scene_.domain_hi[d])) {
+              n[d] = T(-1);
+            } else {
+              continue;
+            }
+            const T zero[D] = {};
+            mpm::project_velocity<D>(v, n, zero, domain_bc_, domain_mu_);
+          }
+          gm_[base + k] = m;
+          gJ_[base + k] = acc[1 + D][k] / m;
+          for (int d = 0; d < D; ++d) gv_[d][base + k] = v[d];
+        }
+      }
+    }
+    std::fill(load_impulse_.begin(), load_impulse_.end(), 0.0);
+    for (int t = 0; t < nthreads; ++t)
+      for (size_t k = 0; k < load_impulse_.size(); ++k) load_impulse_[k] += impulse[t * load_impulse_.size() + k];
+  }
+
+  // G2P: new velocity, affine matrix, J (with J-bar mixing) and position; checks for blow-up.
+  void g2p(T dt) {
+    const T dx = T(dx_);
+    const T cscale = T(4) * inv_dx_ * inv_dx_;
+    const long nblocks = static_cast<long>(pkeys_.size());
+    double vmax2 = 0, ke = 0, pe = 0, el = 0;
+    long bad = std::numeric_limits<long>::max();
+    int bad_kind = 0;
+    bool resort = false;
+    double lo_ok[D], hi_ok[D];
+    for (int d = 0; d < D; ++d) {
+      lo_ok[d] = scene_.domain_lo[d] - dx_;
+      hi_ok[d] = scene_.domain_hi[d] + dx_;
+    }
+#pragma omp parallel for schedule(dynamic, 4) reduction(max : vmax2) reduction(+ : ke, pe, el) reduction(|| : resort)
+    for (long p = 0; p < nblocks; ++p) {
+      // Gather the grid velocities and J of the tile around this block.
+      T tv[D][kTileNodes], tJ[kTileNodes];
+      int blk[D], origin[D];
+      unpack_key<D>(pkeys_[p], blk);
+      for (int d = 0; d < D; ++d) origin[d] = blk[d] * kBlock - 1;
+      for (int a = 0; a < kTileNodes; ++a) {
+        int o = 0, local = 0;
+        for (int d = D - 1, r = a, stride = 1, lstride = 1; d >= 0; --d, r /= kTile) {
+          const int ad = r % kTile;
+          const int bo = ad == 0 ? -1 : (ad <= kBlock ? 0 : 1);  // tile index 0 lies in the block below
+          const int l = ad - 1 - kBlock * bo;
+          o += (bo + 1) * stride;
+          local += l * lstride;
+          stride *= 3;
+          lstride *= kBlock;
+        }
+        const int32_t g = p_nbr_[p * kNbr + o];
+        const size_t idx = static_cast<size_t>(g) * kNodes + local;
+        for (int d = 0; d < D; ++d) tv[d][a] = gv_[d][idx];
+        tJ[a] = gJ_[idx];
+      }
+      for (uint32_t i = pstart_[p]; i < pstart_[p + 1]; ++i) {
+        T w[D][3], f[D];
+        int rel[D];
+        for (int d = 0; d < D; ++d) {
+          const T xg = (x_[d][i] - T(grid_lo_[d])) * inv_dx_;
+          rel[d] = mpm::stencil_base(xg, f[d]) - origin[d];
+          mpm::bspline_weights(f[d], w[d]);
+        }
+        T vn[D] = {}, Cn[D * D] = {}, Jg = 0;
+        if constexpr (D == 2) {
+          for (int i0 = 0; i0 < 3; ++i0)
+            for (int i1 = 0; i1 < 3; ++i1) {
+              const T wt = w[0][i0] * w[1][i1];
+              const int a = (rel[0] + i0) * kTile + rel[1] + i1;
+              const T d0 = (T(i0) - f[0]) * dx, d1 = (T(i1) - f[1]) * dx;
+              const T u0 = wt * tv[0][a], u1 = wt * tv[1][a];
+              vn[0] += u0;
+              vn[1] += u1;
+              Cn[0] += u0 * d0;
+              Cn[1] += u0 * d1;
+              Cn[2] += u1 * d0;
+              Cn[3] += u1 * d1;
+              Jg += wt * tJ[a];
+            }
+        } else {
+          for (int i0 = 0; i0 < 3; ++i0)
+            for (int i1 = 0; i1 < 3; ++i1) {
+              const T w01 = w[0][i0] * w[1][i1];
+              const T d0 = (T(i0) - f[0]) * dx, d1 = (T(i1) - f[1]) * dx;
+              const int row = ((rel[0] + i0) * kTile + rel[1] + i1) * kTile + rel[2];
+              for (int i2 = 0; i2 < 3; ++i2) {
+                const T wt = w01 * w[2][i2];
+                const T d2 = (T(i2) - f[2]) * dx;
+                const int a = row + i2;
+                const T u0 = wt * tv[0][a], u1 = wt * tv[1][a], u2 = wt * tv[2][a];
+                vn[0] += u0;
+                vn[1] += u1;
+                vn[2] += u2;
+                Cn[0] += u0 * d0;
+                Cn[1] += u0 * d1;
+                Cn[2] += u0 * d2;
+                Cn[3] += u1 * d0;
+                Cn[4] += u1 * d1;
+                Cn[5] += u1 * d2;
+                Cn[6] += u2 * d0;
+                Cn[7] += u2 * d1;
+                Cn[8] += u2 * d2;
+                Jg += wt * tJ[a];
+              }
+            }
+        }
+        for (int k = 0; k < D * D; ++k) Cn[k] *= cscale;
+        const T dJ = mpm::volume_ratio<D>(Cn, dt);
+        const T J = mpm::jbar_update(J_[i], Jg, dJ, psi_);
+        J_[i] = J;
+        double v2 = 0, gx = 0;
+        bool finite = std::isfinite(double(J)) && J > T(0);
+        bool inside = true;
+        for (int d = 0; d < D; ++d) {
+          v_[d][i] = vn[d];
+          const T xn = x_[d][i] + dt * vn[d];
+          x_[d][i] = xn;
+          finite &= std::isfinite(double(xn)) && std::isfinite(double(vn[d]));
+          inside &= xn >= T(lo_ok[d]) && xn <= T(hi_ok[d]);
+          v2 += double(vn[d]) * vn[d];
+          gx += double(gravity_[d]) * xn;
+          // Drifted out of the tile margin: re-sort before the next scatter.
+          const int nr = mpm::stencil_base((xn - T(grid_lo_[d])) * inv_dx_, f[d]) - origin[d];
+          resort |= nr < 0 || nr > kBlock + 1;
+        }
+        for (int k = 0; k < D * D; ++k) C_[k][i] = Cn[k];
+        if (!finite || !inside) {
+#pragma omp critical(flume_bad_particle)
+          if (static_cast<long>(i) < bad) {
+            bad = static_cast<long>(i);
+            bad_kind = finite ? 2 : 1;
+          }
+          continue;
+        }
+        vmax2 = std::max(vmax2, v2);
+        ke += 0.5 * mp_ * v2;
+        pe -= mp_ * gx;
+        el += v0_ * mpm::tait_energy_density(double(J), double(K_), double(gamma_));
+      }
+    }
+    max_speed_ = std::sqrt(vmax2);
+    needs_sort_ = resort;
+    const double t_new = time_ + double(dt);
+    if (bad != std::numeric_limits<long>::max()) {
+      double xp[D];
+      for (int d = 0; d < D; ++d) xp[d] = x_[d][bad];
+      std::ostringstream s;
+      s << (bad_kind == 1 ? "non-finite value (NaN/Inf) or non-positive volume ratio J"
+                          : "a particle left the domain")
+        << " at t = " << t_new << " s (step " << steps_ + 1 << ", dt = " << double(dt) << " s), particle " << bad
+        << " at " << fmt_point(xp, D) << "; try a smaller solver.cfl or a finer solver.dx";
+      fail(s.str());
+      return;
+    }
+    const double e = ke + pe + el;
+    if (e > energy0_ + energy_slack_) {
+      std::ostringstream s;
+      s << "energy grew beyond what gravity and forcing supply at t = " << t_new << " s (step " << steps_ + 1
+        << "): total " << e << " J against " << energy0_ << " J initially (max speed " << std::sqrt(vmax2)
+        << " m/s); try a smaller solver.cfl";
+      fail(s.str());
+    }
+    last_energy_ = {ke, pe, el};
+  }
+
+  void fail(const std::string& what) {
+    status_ = RunStatus::kUnstable;
+    message_ = what;
+  }
+
+ public:
+  const Energy& last_energy() const { return last_energy_; }
+  const Scene& scene() const { return scene_; }
+
+ private:
+  Scene scene_;
+  InstrumentSet<MpmSolver> instruments_;
+  double dx_ = 0;
+  T inv_dx_ = 0;
+  double grid_lo_[D] = {};
+  T gravity_[D] = {};
+  T K_ = 0, gamma_ = 0, mu_ = 0, psi_ = 0;
+  double c_ = 0;
+  double spacing_ = 0, v0_ = 0, mp_ = 0, mass_ = 0;
+  size_t n_ = 0;
+  std::vector<T> x_[D], v_[D], C_[D * D], J_;
+  std::vector<uint64_t> pkeys_, gkeys_;
+  std::vector<uint32_t> pstart_;
+  std::vector<int32_t> p_nbr_, g_nbr_;
+  std::vector<uint32_t> g_bnd_start_;
+  std::vector<int32_t> g_bnd_;
+  std::vector<T> gm_, gv_[D], gJ_, tiles_;
+  std::vector<Wall> walls_;
+  mpm::Bc domain_bc_ = mpm::Bc::kSeparate;
+  T domain_mu_ = 0;
+  std::vector<double> load_impulse_;
+  bool needs_sort_ = true;
+  double time_ = 0, dt_ = 0, max_speed_ = 0;
+  long steps_ = 0;
+  double energy0_ = 0, energy_slack_ = 0;
+  Energy last_energy_;
+  RunStatus status_ = RunStatus::kRunning;
+  std::string message_;
+};
+
+}  // namespace
+
+std::unique_ptr<Simulation> make_cpu_simulation(const Scene& scene, const SimulationOptions& options) {
+  const bool f = scene.solver.precision == Precision::kFloat;
+  if (scene.dimension == 2) {
+    if (f) return std::make_unique<MpmSolver<2, float>>(scene, options);
+    return std::make_unique<MpmSolver<2, double>>(scene, options);
+  }
+  if (f) return std::make_unique<MpmSolver<3, float>>(scene, options);
+  return std::make_unique<MpmSolver<3, double>>(scene, options);
+}
+
+}  // namespace flume

@@ -1,0 +1,101 @@
+#include "solver/run.h"
+
+#include <sys/resource.h>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+
+#include "common/errors.h"
+#include "flume_version.h"
+#include "solver/run_output.h"
+#include "store/h5/run_file.h"
+
+namespace flume {
+
+double peak_rss_mb() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return u.ru_maxrss / 1024.0;  // Linux reports kilobytes
+}
+
+void write_record(h5::RunFile& file, const Scene& scene, const Record& record) {
+  for (const auto& [name, ts] : record.gauges) {
+    file.write_series("/gauges/" + name, "time", ts.time);
+    file.write_series("/gauges/" + name, "elevation", ts.values);
+  }
+  for (const auto& [name, ts] : record.probes) {
+    file.write_series("/probes/" + name, "time", ts.time);
+    file.write_matrix("/probes/" + name, "velocity", ts.values, ts.components);
+  }
+  for (const auto& [name, ts] : record.loads) {
+    file.write_series("/loads/" + name, "time", ts.time);
+    file.write_matrix("/loads/" + name, "force", ts.values, ts.components);
+  }
+  for (const auto& [name, v] : record.diagnostics) file.write_series("/diagnostics", name, v);
+  file.set_attribute("/", "scene", scene.name);
+  file.set_attribute("/", "scene_file", scene.file);
+  file.set_attribute("/", "dimension", scene.dimension);
+  file.set_attribute("/", "dx", scene.solver.dx);
+  file.set_attribute("/", "flume_version", std::string(FLUME_VERSION) + " (" + FLUME_GIT_VERSION + ")");
+}
+
+namespace {
+void add_snapshot(h5::RunFile& file, const Simulation& sim) {
+  std::vector<double> xyz, vel, p;
+  sim.particle_positions(xyz);
+  sim.particle_velocities(vel);
+  sim.particle_pressures(p);
+  const size_t n = sim.particle_count();
+  std::vector<float> fx(xyz.begin(), xyz.end()), fv(vel.begin(), vel.end()), fp(p.begin(), p.end());
+  file.add_snapshot(sim.time(), n, fx.data(), {{"pressure", fp.data()}}, {{"velocity", fv.data()}});
+}
+}  // namespace
+
+RunOutcome run_scene(const Scene& scene, const SimulationOptions& options, const std::string& out_dir,
+                     bool progress) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  fs::create_directories(out_dir, ec);
+  if (ec) throw InputError(out_dir, "--out", "cannot create the output directory: " + ec.message());
+  auto sim = make_simulation(scene, options);
+  h5::RunFile file((fs::path(out_dir) / "result.h5").string());
+  file.set_attribute("/", "status", "running");
+
+  const double snap_period = scene.instruments.snapshot_rate_hz > 0 ? 1.0 / scene.instruments.snapshot_rate_hz : 0;
+  double next_snap = 0;
+  double next_report = 0;
+  const auto t0 = std::chrono::steady_clock::now();
+  RunStatus status = RunStatus::kRunning;
+  while (true) {
+    if (snap_period > 0 && sim->time() + 1e-12 >= next_snap) {
+      add_snapshot(file, *sim);
+      while (next_snap <= sim->time() + 1e-12) next_snap += snap_period;
+    }
+    if (status != RunStatus::kRunning) break;
+    status = sim->step();
+    if (progress && sim->time() >= next_report) {
+      std::fprintf(stderr, "t = %.3f s / %.3f s, step %ld, dt = %.3g s\n", sim->time(), scene.solver.end_time,
+                   sim->steps(), sim->last_dt());
+      next_report += scene.solver.end_time / 10;
+    }
+  }
+  RunOutcome out;
+  out.status = status;
+  out.message = status == RunStatus::kOk ? "completed" : sim->message();
+  out.cost.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  out.cost.steps = sim->steps();
+  out.cost.particles = sim->particle_count();
+  out.cost.particle_steps_per_s =
+      out.cost.wall_s > 0 ? double(out.cost.steps) * double(out.cost.particles) / out.cost.wall_s : 0;
+  out.cost.peak_rss_mb = peak_rss_mb();
+  out.metrics = compute_metrics(scene, sim->record());
+  write_record(file, scene, sim->record());
+  file.set_attribute("/", "status", status_name(status));
+  file.set_attribute("/", "message", out.message);
+  file.finalize();
+  write_run_json((fs::path(out_dir) / "run.json").string(), status, out.message, out.metrics, out.cost, scene);
+  return out;
+}
+
+}  // namespace flume

@@ -1,0 +1,444 @@
+// Scene JSON -> plain structs, with every value checked once here.
+#include "solver/scene.h"
+
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <sstream>
+
+#include "common/errors.h"
+
+namespace flume {
+namespace {
+
+using json = nlohmann::json;
+
+std::string fmt(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
+const char* type_name(const json& j) {
+  switch (j.type()) {
+    case json::value_t::null: return "null";
+    case json::value_t::boolean: return "a boolean";
+    case json::value_t::string: return "a string";
+    case json::value_t::array: return "an array";
+    case json::value_t::object: return "an object";
+    default: return "a number";
+  }
+}
+
+// A JSON object being read: each accessor marks its key as used, and finish() rejects the rest, so a
+// misspelt field is an error rather than a silently ignored default.
+class Reader {
+ public:
+  Reader(const json& j, std::string path, const std::string& file) : j_(j), path_(std::move(path)), file_(file) {
+    if (!j_.is_object()) fail("", std::string("must be an object, got ") + type_name(j_));
+  }
+
+  [[noreturn]] void fail(const std::string& key, const std::string& what) const {
+    throw InputError(file_, join(key), what);
+  }
+  std::string join(const std::string& key) const {
+    if (key.empty()) return path_;
+    return path_.empty() ? key : path_ + "." + key;
+  }
+  bool has(const std::string& key) const { return j_.contains(key); }
+  const json& raw(const std::string& key) {
+    used_.insert(key);
+    return j_.at(key);
+  }
+
+  // A number in [lo, hi]; `lo_open`/`hi_open` exclude the end.
+  double number(const std::string& key, std::optional<double> def, double lo, double hi, bool lo_open = false,
+                bool hi_open = false) {
+    if (!has(key)) {
+      if (!def) fail(key, "is required (a number in " + range(lo, hi, lo_open, hi_open) + ")");
+      return *def;
+    }
+    const json& v = raw(key);
+    if (!v.is_number()) fail(key, std::string("must be a number, got ") + type_name(v));
+    const double x = v.get<double>();
+    const bool ok = std::isfinite(x) && (lo_open ? x > lo : x >= lo) && (hi_open ? x < hi : x <= hi);
+    if (!ok) fail(key, "must be in " + range(lo, hi, lo_open, hi_open) + " (got " + fmt(x) + ")");
+    return x;
+  }
+  int integer(const std::string& key, std::optional<int> def, int lo, int hi) {
+    if (!has(key)) {
+      if (!def) fail(key, "is required (an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "])");
+      return *def;
+    }
+    const json& v = raw(key);
+    if (!v.is_number_integer() && !(v.is_number() && std::floor(v.get<double>()) == v.get<double>()))
+      fail(key, std::string("must be an integer, got ") + (v.is_number() ? fmt(v.get<double>()) : type_name(v)));
+    const double x = v.get<double>();
+    if (x < lo || x > hi)
+      fail(key, "must be in [" + std::to_string(lo) + ", " + std::to_string(hi) + "] (got " + fmt(x) + ")");
+    return static_cast<int>(x);
+  }
+  std::string string(const std::string& key, std::optional<std::string> def) {
+    if (!has(key)) {
+      if (!def) fail(key, "is required (a string)");
+      return *def;
+    }
+    const json& v = raw(key);
+    if (!v.is_string()) fail(key, std::string("must be a string, got ") + type_name(v));
+    return v.get<std::string>();
+  }
+  template <typename E>
+  E choice(const std::string& key, std::optional<E> def, const std::vector<std::pair<const char*, E>>& options) {
+    std::string allowed;
+    for (const auto& o : options) allowed += (allowed.empty() ? "" : "|") + std::string(o.first);
+    if (!has(key)) {
+      if (!def) fail(key, "is required (one of " + allowed + ")");
+      return *def;
+    }
+    const json& v = raw(key);
+    if (!v.is_string()) fail(key, "must be one of " + allowed + ", got " + type_name(v));
+    for (const auto& o : options)
+      if (v.get<std::string>() == o.first) return o.second;
+    fail(key, "must be one of " + allowed + " (got '" + v.get<std::string>() + "')");
+  }
+  // A vector of `dim` finite numbers.
+  Vec3d vec(const std::string& key, int dim, std::optional<Vec3d> def = std::nullopt) {
+    if (!has(key)) {
+      if (!def) fail(key, "is required (an array of " + std::to_string(dim) + " numbers)");
+      return *def;
+    }
+    const json& v = raw(key);
+    if (!v.is_array() || static_cast<int>(v.size()) != dim)
+      fail(key, "must be an array of " + std::to_string(dim) + " numbers (the scene's dimension)");
+    Vec3d out{};
+    for (int i = 0; i < dim; ++i) {
+      if (!v[i].is_number() || !std::isfinite(v[i].get<double>()))
+        fail(key + "." + std::to_string(i), "must be a finite number");
+      out[i] = v[i].get<double>();
+    }
+    return out;
+  }
+  Reader object(const std::string& key) {
+    static const json empty = json::object();
+    return has(key) ? Reader(raw(key), join(key), file_) : Reader(empty, join(key), file_);
+  }
+  // Elements of an array of objects (absent means empty).
+  std::vector<Reader> array(const std::string& key) {
+    std::vector<Reader> out;
+    if (!has(key)) return out;
+    const json& v = raw(key);
+    if (!v.is_array()) fail(key, std::string("must be an array, got ") + type_name(v));
+    for (size_t i = 0; i < v.size(); ++i) out.emplace_back(v[i], join(key) + "." + std::to_string(i), file_);
+    return out;
+  }
+  void finish() const {
+    for (auto it = j_.begin(); it != j_.end(); ++it) {
+      if (used_.count(it.key())) continue;
+      std::string allowed;
+      for (const auto& k : used_) allowed += (allowed.empty() ? "" : ", ") + k;
+      fail(it.key(), "unknown field" + (allowed.empty() ? std::string() : " (known here: " + allowed + ")"));
+    }
+  }
+  const std::string& path() const { return path_; }
+  const std::string& file() const { return file_; }
+
+  // Marks keys as known without reading them (for fields read by a later pass).
+  void accept(const std::string& key) { used_.insert(key); }
+
+ private:
+  static std::string range(double lo, double hi, bool lo_open, bool hi_open) {
+    auto b = [](double v) { return std::isinf(v) ? std::string(v < 0 ? "-inf" : "inf") : fmt(v); };
+    return std::string(lo_open ? "(" : "[") + b(lo) + ", " + b(hi) + (hi_open ? ")" : "]");
+  }
+  const json& j_;
+  std::string path_;
+  const std::string& file_;
+  std::set<std::string> used_;
+};
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+void apply_override(json& root, const Override& o, const std::string& file) {
+  json value;
+  try {
+    value = json::parse(o.value);
+  } catch (const json::parse_error&) {
+    value = o.value;  // not JSON: a plain string such as `float` or `exponential`
+  }
+  json* node = &root;
+  std::stringstream ss(o.path);
+  std::string seg, walked;
+  std::vector<std::string> segs;
+  while (std::getline(ss, seg, '.')) segs.push_back(seg);
+  if (segs.empty() || o.path.empty()) throw InputError(file, o.path, "empty override path");
+  for (size_t i = 0; i < segs.size(); ++i) {
+    const std::string& s = segs[i];
+    const bool last = i + 1 == segs.size();
+    walked += (walked.empty() ? "" : ".") + s;
+    if (node->is_array()) {
+      char* end = nullptr;
+      const long idx = std::strtol(s.c_str(), &end, 10);
+      if (*end || idx < 0 || idx >= static_cast<long>(node->size()))
+        throw InputError(file, walked, "no such array element (the array has " + std::to_string(node->size()) +
+                                           " elements)");
+      node = &(*node)[idx];
+    } else if (node->is_object() || node->is_null()) {
+      // Missing keys are created: the strict parse that follows rejects any that are not scene fields.
+      node = &(*node)[s];
+    } else {
+      throw InputError(file, walked, "cannot set a field inside a value that is not an object or array");
+    }
+    if (last) *node = value;
+  }
+}
+
+Shape read_shape(Reader& r, int dim) {
+  Shape s;
+  s.type = r.choice<ShapeType>("type", std::nullopt, {{"box", ShapeType::kBox}, {"half_space", ShapeType::kHalfSpace}});
+  if (s.type == ShapeType::kBox) {
+    s.lo = r.vec("lo", dim);
+    s.hi = r.vec("hi", dim);
+    for (int d = 0; d < dim; ++d)
+      if (!(s.hi[d] > s.lo[d])) r.fail("hi", "must exceed lo on every axis (axis " + std::to_string(d) + ")");
+  } else {
+    s.point = r.vec("point", dim);
+    s.normal = r.vec("normal", dim);
+    double n2 = 0;
+    for (int d = 0; d < dim; ++d) n2 += s.normal[d] * s.normal[d];
+    if (n2 < 1e-24) r.fail("normal", "must be a non-zero vector");
+    for (int d = 0; d < dim; ++d) s.normal[d] /= std::sqrt(n2);
+  }
+  return s;
+}
+
+// Signed distance from x to a shape (negative inside the solid).
+double shape_distance(const Shape& s, const Vec3d& x, int dim) {
+  if (s.type == ShapeType::kHalfSpace) {
+    double d = 0;
+    for (int i = 0; i < dim; ++i) d += (x[i] - s.point[i]) * s.normal[i];
+    return d;
+  }
+  double outside2 = 0, inside = -kInf;
+  for (int i = 0; i < dim; ++i) {
+    const double q = std::max(s.lo[i] - x[i], x[i] - s.hi[i]);
+    if (q > 0) outside2 += q * q;
+    inside = std::max(inside, q);
+  }
+  return outside2 > 0 ? std::sqrt(outside2) : inside;
+}
+
+// Is the solid overlapping the open box (lo, hi) by more than tol? Tested on a lattice of the box's points,
+// which is exact for half-spaces (corners) and for boxes (the lattice includes the overlap's corners).
+bool solid_overlaps_box(const Shape& s, const Vec3d& lo, const Vec3d& hi, int dim, double tol) {
+  if (s.type == ShapeType::kBox) {
+    for (int d = 0; d < dim; ++d)
+      if (std::min(hi[d], s.hi[d]) - std::max(lo[d], s.lo[d]) <= tol) return false;
+    return true;
+  }
+  // Half-space: the minimum of (x - p).n over the box is at a corner.
+  double m = 0;
+  for (int d = 0; d < dim; ++d) m += (s.normal[d] > 0 ? lo[d] : hi[d]) * s.normal[d] - s.point[d] * s.normal[d];
+  return m < -tol;
+}
+
+Scene parse(const json& root_json, const std::string& file) {
+  Scene sc;
+  sc.file = file;
+  Reader root(root_json, "", file);
+  sc.name = root.string("name", std::string("scene"));
+  sc.dimension = root.integer("dimension", std::nullopt, 2, 3);
+  const int dim = sc.dimension;
+  const int up = dim - 1;
+
+  {
+    Reader r = root.object("domain");
+    if (!root.has("domain")) root.fail("domain", "is required (an object with lo and hi)");
+    sc.domain_lo = r.vec("lo", dim);
+    sc.domain_hi = r.vec("hi", dim);
+    for (int d = 0; d < dim; ++d)
+      if (!(sc.domain_hi[d] > sc.domain_lo[d])) r.fail("hi", "must exceed domain.lo on every axis");
+    sc.domain_walls = r.choice<BoundaryCondition>("walls", BoundaryCondition::kSeparate,
+                                                  {{"sticky", BoundaryCondition::kSticky},
+                                                   {"slip", BoundaryCondition::kSlip},
+                                                   {"separate", BoundaryCondition::kSeparate}});
+    sc.domain_wall_friction = r.number("friction", 0.0, 0.0, 10.0);
+    r.finish();
+  }
+
+  {
+    Reader r = root.object("solver");
+    auto& s = sc.solver;
+    double min_extent = kInf;
+    for (int d = 0; d < dim; ++d) min_extent = std::min(min_extent, sc.domain_hi[d] - sc.domain_lo[d]);
+    s.dx = r.number("dx", std::nullopt, 0.0, min_extent / 4, true, false);
+    s.ppc = r.integer("ppc", dim == 2 ? 4 : 8, 1, 64);
+    const int per_axis = static_cast<int>(std::lround(std::pow(s.ppc, 1.0 / dim)));
+    int p = 1;
+    for (int d = 0; d < dim; ++d) p *= per_axis;
+    if (p != s.ppc)
+      r.fail("ppc", std::string("must be a perfect ") + (dim == 2 ? "square (1, 4, 9, 16, ...)" : "cube (1, 8, 27, 64)") +
+                        " so particles sit on a regular lattice (got " + std::to_string(s.ppc) + ")");
+    s.cfl = r.number("cfl", 0.4, 0.0, 10.0, true, false);
+    s.precision = r.choice<Precision>("precision", Precision::kDouble,
+                                      {{"float", Precision::kFloat}, {"double", Precision::kDouble}});
+    s.end_time = r.number("end_time", std::nullopt, 0.0, 1e6, true, false);
+    s.max_dt = r.number("max_dt", 1e-3, 0.0, 1.0, true, false);
+    Vec3d g{};
+    g[up] = -9.80665;
+    s.gravity = r.vec("gravity", dim, g);
+    r.finish();
+  }
+
+  {
+    Reader r = root.object("fluid");
+    auto& f = sc.fluid;
+    f.density = r.number("density", 1000.0, 0.0, 1e5, true, false);
+    f.bulk_modulus = r.number("bulk_modulus", 2.0e7, 0.0, 1e11, true, false);
+    f.gamma = r.number("gamma", 7.0, 1.0, 20.0);
+    f.viscosity = r.number("viscosity", 1.0e-3, 0.0, 1e3);
+    f.jbar_psi = r.number("jbar_psi", 0.0, 0.0, 1.0);
+    r.finish();
+  }
+
+  {
+    auto walls = root.array("boundaries");
+    std::set<std::string> names;
+    for (auto& r : walls) {
+      Boundary b;
+      b.name = r.string("name", "boundary" + std::to_string(sc.boundaries.size()));
+      if (!names.insert(b.name).second) r.fail("name", "duplicate boundary name '" + b.name + "'");
+      b.shape = read_shape(r, dim);
+      b.condition = r.choice<BoundaryCondition>("condition", BoundaryCondition::kSeparate,
+                                                {{"sticky", BoundaryCondition::kSticky},
+                                                 {"slip", BoundaryCondition::kSlip},
+                                                 {"separate", BoundaryCondition::kSeparate}});
+      b.friction = r.number("friction", 0.0, 0.0, 10.0);
+      b.velocity = r.vec("velocity", dim, Vec3d{});
+      r.finish();
+      sc.boundaries.push_back(b);
+    }
+  }
+
+  {
+    auto regions = root.array("water");
+    if (regions.empty()) root.fail("water", "is required: a non-empty array of boxes {lo, hi}");
+    for (auto& r : regions) {
+      WaterRegion w;
+      const std::string type = r.string("type", std::string("box"));
+      if (type != "box") r.fail("type", "must be box (got '" + type + "')");
+      w.lo = r.vec("lo", dim);
+      w.hi = r.vec("hi", dim);
+      for (int d = 0; d < dim; ++d) {
+        if (!(w.hi[d] > w.lo[d])) r.fail("hi", "must exceed lo on every axis (axis " + std::to_string(d) + ")");
+        // The grid needs two cells of margin inside the domain for the quadratic stencil and the walls.
+        const double lo_ok = sc.domain_lo[d] + 2 * sc.solver.dx, hi_ok = sc.domain_hi[d] - 2 * sc.solver.dx;
+        if (w.lo[d] < lo_ok - 1e-12 || w.hi[d] > hi_ok + 1e-12)
+          r.fail(w.lo[d] < lo_ok - 1e-12 ? "lo" : "hi",
+                 "water must lie inside the domain at least 2 cells (2 dx) from its edge: axis " + std::to_string(d) +
+                     " allows [" + fmt(lo_ok) + ", " + fmt(hi_ok) + "], got [" + fmt(w.lo[d]) + ", " + fmt(w.hi[d]) +
+                     "]");
+      }
+      // Water placed inside a solid would be expelled violently at t = 0: forbidden.
+      for (const auto& b : sc.boundaries)
+        if (solid_overlaps_box(b.shape, w.lo, w.hi, dim, 0.25 * sc.solver.dx))
+          r.fail("", "water region overlaps solid boundary '" + b.name + "'; water may only fill free space");
+      r.finish();
+      sc.water.push_back(w);
+    }
+  }
+
+  {
+    Reader inst = root.object("instruments");
+    auto& I = sc.instruments;
+    std::set<std::string> names;
+    auto unique = [&](Reader& r, const std::string& n) {
+      if (!names.insert(n).second) r.fail("name", "duplicate instrument name '" + n + "'");
+    };
+    auto inside = [&](Reader& r, const char* key, const Vec3d& p, int axes) {
+      for (int d = 0; d < axes; ++d)
+        if (p[d] < sc.domain_lo[d] || p[d] > sc.domain_hi[d])
+          r.fail(key, "must lie inside the domain on axis " + std::to_string(d) + " ([" + fmt(sc.domain_lo[d]) +
+                          ", " + fmt(sc.domain_hi[d]) + "], got " + fmt(p[d]) + ")");
+    };
+    for (auto& r : inst.array("gauges")) {
+      Gauge g;
+      g.name = r.string("name", std::nullopt);
+      unique(r, g.name);
+      g.position = r.vec("position", dim - 1);  // horizontal coordinates only
+      inside(r, "position", g.position, dim - 1);
+      g.rate_hz = r.number("rate_hz", 100.0, 0.0, 1e6, true, false);
+      g.datum = r.number("datum_m", 0.0, -1e4, 1e4);
+      r.finish();
+      I.gauges.push_back(g);
+    }
+    for (auto& r : inst.array("probes")) {
+      Probe p;
+      p.name = r.string("name", std::nullopt);
+      unique(r, p.name);
+      p.position = r.vec("position", dim);
+      inside(r, "position", p.position, dim);
+      p.rate_hz = r.number("rate_hz", 100.0, 0.0, 1e6, true, false);
+      r.finish();
+      I.probes.push_back(p);
+    }
+    for (auto& r : inst.array("loads")) {
+      LoadCell l;
+      l.name = r.string("name", std::nullopt);
+      unique(r, l.name);
+      l.boundary = r.string("boundary", std::nullopt);
+      bool found = false;
+      for (const auto& b : sc.boundaries) found |= b.name == l.boundary;
+      if (!found) r.fail("boundary", "names no boundary of this scene ('" + l.boundary + "')");
+      l.rate_hz = r.number("rate_hz", 1000.0, 0.0, 1e7, true, false);
+      r.finish();
+      I.loads.push_back(l);
+    }
+    I.diagnostics_rate_hz = inst.number("diagnostics_rate_hz", 100.0, 0.0, 1e7, true, false);
+    I.snapshot_rate_hz = inst.number("snapshot_rate_hz", 0.0, 0.0, 1e4);
+    inst.finish();
+  }
+  root.finish();
+  return sc;
+}
+
+}  // namespace
+
+Override parse_override(const std::string& text) {
+  const auto eq = text.find('=');
+  if (eq == std::string::npos || eq == 0)
+    throw InputError("--set", text, "expected path=value, e.g. --set solver.dx=0.01");
+  return {text.substr(0, eq), text.substr(eq + 1)};
+}
+
+Scene parse_scene_text(const std::string& json_text, const std::string& file_label,
+                       const std::vector<Override>& overrides) {
+  json root;
+  try {
+    root = json::parse(json_text);
+  } catch (const json::parse_error& e) {
+    throw InputError(file_label, "", std::string("not valid JSON: ") + e.what());
+  }
+  for (const auto& o : overrides) apply_override(root, o, file_label + " (--set " + o.path + ")");
+  return parse(root, file_label);
+}
+
+Scene load_scene(const std::string& file, const std::vector<Override>& overrides) {
+  std::ifstream in(file);
+  if (!in) throw InputError(file, "", "cannot open the scene file");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return parse_scene_text(ss.str(), file, overrides);
+}
+
+const char* to_string(BoundaryCondition c) {
+  switch (c) {
+    case BoundaryCondition::kSticky: return "sticky";
+    case BoundaryCondition::kSlip: return "slip";
+    default: return "separate";
+  }
+}
+const char* to_string(Precision p) { return p == Precision::kFloat ? "float" : "double"; }
+
+}  // namespace flume

@@ -1,0 +1,80 @@
+// A running simulation of a scene, independent of dimension, precision and backend.
+#pragma once
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "solver/scene.h"
+
+namespace flume {
+
+enum class Backend { kCpu, kCuda };
+
+struct SimulationOptions {
+  Backend backend = Backend::kCpu;
+  int threads = 0;  // 0: OpenMP's default
+};
+
+// A sampled time series with `components` values per sample (1 for a gauge, D for a probe or load).
+struct TimeSeries {
+  int components = 1;
+  std::vector<double> time;
+  std::vector<double> values;  // row-major, time.size() x components
+  size_t size() const { return time.size(); }
+  double at(size_t i, int c = 0) const { return values[i * components + c]; }
+};
+
+// Everything the instruments recorded. Names are the instruments' names from the scene.
+struct Record {
+  std::map<std::string, TimeSeries> gauges;  // water elevation above the gauge's datum (m)
+  std::map<std::string, TimeSeries> probes;  // velocity (m/s), D components
+  std::map<std::string, TimeSeries> loads;   // force of the water on a boundary (N; N/m in 2D), D components
+  std::map<std::string, std::vector<double>> diagnostics;  // time, mass, kinetic, potential, elastic, total, dt, max_speed, step
+};
+
+enum class RunStatus { kRunning, kOk, kUnstable };
+
+// Cost counters, as `flume run` reports them.
+struct Cost {
+  double wall_s = 0;
+  long steps = 0;
+  size_t particles = 0;
+  double particle_steps_per_s = 0;
+  double peak_rss_mb = 0;
+};
+
+class Simulation {
+ public:
+  virtual ~Simulation() = default;
+  // Advances one adaptive step. Returns kUnstable (and sets message()) when the step produced NaN/Inf,
+  // a particle left the domain or the energy grew beyond what gravity and forcing can supply.
+  virtual RunStatus step() = 0;
+  virtual double time() const = 0;
+  virtual double last_dt() const = 0;
+  virtual long steps() const = 0;
+  virtual size_t particle_count() const = 0;
+  virtual double total_mass() const = 0;
+  virtual const Record& record() const = 0;
+  virtual const std::string& message() const = 0;
+  // Particle positions (n x 3, the unused axis 0 in 2D) and velocities, for snapshots and tests.
+  virtual void particle_positions(std::vector<double>& xyz) const = 0;
+  virtual void particle_velocities(std::vector<double>& vel) const = 0;
+  virtual void particle_pressures(std::vector<double>& p) const = 0;
+  // Grid memory actually allocated (bytes) and blocks active now: what the sparse grid saves.
+  virtual size_t grid_bytes() const = 0;
+  virtual size_t active_blocks() const = 0;
+  virtual size_t particle_bytes() const = 0;
+  // Linear and angular momentum (about the origin), for conservation checks: 3 components each.
+  virtual void momentum(double linear[3], double angular[3]) const = 0;
+  // Sets particle velocities to v(x) = v0 + omega x (x - centre) (3D; in 2D omega is about the out-of-plane
+  // axis and only omega[2] is used). For tests and initial conditions.
+  virtual void set_rigid_velocity(const double v0[3], const double omega[3], const double centre[3]) = 0;
+};
+
+// Builds the solver for the scene's dimension and precision. Throws InputError for an unavailable backend.
+std::unique_ptr<Simulation> make_simulation(const Scene& scene, const SimulationOptions& options);
+
+bool cuda_available();  // built with CUDA and a device present
+
+}  // namespace flume

@@ -1,0 +1,62 @@
+// Helpers shared by the solver tests.
+#pragma once
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "solver/scene.h"
+#include "solver/simulation.h"
+
+namespace flume::test {
+
+// A measured record: shared/validation/REL beside the project when present, else the copy under tests/data.
+inline std::string validation_file(const std::string& rel) {
+  const std::string shared = std::string(FLUME_VALIDATION_DIR) + "/" + rel;
+  if (std::ifstream(shared).good()) return shared;
+  return std::string(FLUME_SOURCE_DIR) + "/tests/data/validation/" + rel;
+}
+
+inline std::string read_text(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+// Numeric rows of a CSV with '#' comment lines and one header line.
+inline std::vector<std::vector<double>> read_csv(const std::string& path) {
+  std::ifstream in(path);
+  std::vector<std::vector<double>> rows;
+  std::string line;
+  bool header = true;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    if (header) {
+      header = false;
+      continue;
+    }
+    std::vector<double> r;
+    std::stringstream ss(line);
+    std::string cell;
+    while (std::getline(ss, cell, ',')) r.push_back(std::stod(cell));
+    rows.push_back(r);
+  }
+  return rows;
+}
+
+// Runs a shell command, returning its exit status.
+inline int run_command(const std::string& cmd) {
+  const int rc = std::system(cmd.c_str());
+  return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+}
+
+inline RunStatus run_until(Simulation& sim, double t_end) {
+  RunStatus s = RunStatus::kRunning;
+  while (s == RunStatus::kRunning && sim.time() < t_end - 1e-12) s = sim.step();
+  return s;
+}
+
+}  // namespace flume::test
