@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 #include <thread>
 
+#include "campaigns/gauge_model.h"
 #include "common/errors.h"
 
 namespace flume::campaigns {
@@ -24,6 +25,7 @@ const std::map<std::string, std::vector<std::string>>& registry() {
   static const std::map<std::string, std::vector<std::string>> models = {
       {"ishigami", {"x1", "x2", "x3"}},
       {"test", {"x", "y", "z", "behaviour", "sleep_s"}},
+      {"gauge", gauge_model_inputs()},  // also reservoir.forcing.table.<i>.<0|1> (gauge_model.h)
   };
   return models;
 }
@@ -73,6 +75,7 @@ std::string check_model_inputs(const std::string& model,
                                const std::vector<std::pair<std::string, std::string>>& inputs) {
   const auto names = model_inputs(model);
   if (names.empty()) return "model: unknown model '" + model + "'";
+  if (model == "gauge") return check_gauge_inputs(inputs);
   for (const auto& [name, text] : inputs) {
     if (std::find(names.begin(), names.end(), name) == names.end()) {
       std::string allowed;
@@ -137,6 +140,17 @@ int model_main(int argc, char** argv) {
   const auto t0 = std::chrono::steady_clock::now();
   json result = {{"status", "ok"}, {"message", ""}};
   int code = kExitOk;
+  if (model == "gauge") {
+    std::map<std::string, double> metrics;
+    std::int64_t steps = 0;
+    run_gauge_model(sets, out_dir, metrics, steps);
+    result["metrics"] = metrics;
+    const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    result["cost"] = {{"wall_s", wall_s}, {"steps", steps}, {"particles", 0}, {"particle_steps_per_s", 0.0},
+                      {"peak_rss_mb", 0.0}};
+    write_run_json(out_dir, result);
+    return kExitOk;
+  }
   if (model == "ishigami") {
     const double a = 7.0, b = 0.1;
     const double x1 = in.number("x1", 0), x2 = in.number("x2", 0), x3 = in.number("x3", 0);

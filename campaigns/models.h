@@ -4,6 +4,12 @@
 //             (Ishigami & Homma 1990; its Sobol' indices are known in closed form).
 //   test:     y = x + 10 y_in + 100 z; `behaviour` ok|segfault|hang|unstable|fail picks how the run ends,
 //             after `sleep_s` seconds; for the crash, hang and kill tests.
+//   gauge:    TEST STAND-IN for the Waseda scene (calibration tests): WG1..WG4 elevation records written to
+//             result.h5 (/gauges/<name>/{time, elevation}, 100 Hz) and their peak/arrival metrics, from a
+//             reservoir draining through the gate (orifice law) under the scene's hold f(t) and a linear long
+//             wave to the gauges. Its inputs are the scene's paths (reservoir.forcing.model|t99_s|table[.i.j],
+//             reservoir.gate_height_m, reservoir.fill_level_m, basin.still_water_m, solver.end_time), so a
+//             calibration spec moves from the stand-in to the scene unchanged. Not a model of the flume.
 #pragma once
 #include <string>
 #include <utility>

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "calibration/commands.h"
 #include "campaigns/commands.h"
 #include "flume_version.h"
 #include "solver/commands.h"
@@ -24,6 +25,7 @@ const std::vector<Command>& commands() {
       {"check", flume::check_main, "check SCENE.json [--set path=value ...]   validate a scene, print a summary"},
       {"campaign", flume::campaign_main, "campaign run SPEC.json --db FILE [--workers N] | status --db FILE | export --db FILE --csv OUT"},
       {"model", flume::model_main, "model ishigami|test --out DIR [--set name=value ...]   analytic stand-ins for `run`"},
+      {"calibrate", flume::calibration::calibrate_main, "calibrate SPEC.json --db FILE --out DIR [--workers N] | target RESULT.h5 --out CSV | history --db FILE"},
   };
   return list;
 }

@@ -16,6 +16,19 @@
 namespace flume::store {
 namespace {
 
+constexpr const char* kEvaluationsTable = R"SQL(
+CREATE TABLE IF NOT EXISTS evaluations (
+  campaign INTEGER NOT NULL REFERENCES campaigns(id),
+  phase TEXT NOT NULL,
+  start INTEGER NOT NULL,
+  seq INTEGER NOT NULL,
+  run INTEGER REFERENCES runs(id),
+  params TEXT NOT NULL,
+  value REAL,
+  terms TEXT,
+  PRIMARY KEY (campaign, phase, start, seq));
+)SQL";
+
 constexpr const char* kStatuses[] = {"pending", "running", "ok", "unstable", "failed", "timeout"};
 
 // Columns of `runs` other than the parameters: a parameter path may not reuse one of these names.
@@ -171,6 +184,8 @@ CampaignStore::CampaignStore(const std::string& file, bool read_only) : file_(fi
     }
     if (empty) create_schema();
     check_schema();
+    // Version 1 files written before calibrations existed lack this table; adding it changes nothing else.
+    if (!read_only) exec(db_, kEvaluationsTable);
   } catch (...) {
     sqlite3_close(db_);
     db_ = nullptr;
@@ -234,6 +249,16 @@ CREATE TABLE IF NOT EXISTS metrics (
   name TEXT NOT NULL,
   value REAL,
   PRIMARY KEY (run, name));
+CREATE TABLE IF NOT EXISTS evaluations (
+  campaign INTEGER NOT NULL REFERENCES campaigns(id),
+  phase TEXT NOT NULL,
+  start INTEGER NOT NULL,
+  seq INTEGER NOT NULL,
+  run INTEGER REFERENCES runs(id),
+  params TEXT NOT NULL,
+  value REAL,
+  terms TEXT,
+  PRIMARY KEY (campaign, phase, start, seq));
 CREATE VIEW IF NOT EXISTS run_results AS
   SELECT c.name AS campaign_name, r.id AS run, r.design_index, r.status, r.message, r.params,
          (SELECT json_group_object(m.name, m.value) FROM metrics m WHERE m.run = r.id) AS metrics,
@@ -470,6 +495,106 @@ void CampaignStore::refresh_results_view(std::int64_t campaign) {
   exec(db_, "CREATE VIEW " + quote_id(results_view_name(name)) + " AS " + select);
   t.commit();
   known_metrics_[campaign] = metrics;
+}
+
+std::int64_t CampaignStore::add_run(std::int64_t campaign, const PlannedRun& r) {
+  std::vector<std::string> paths;
+  {
+    Stmt p(db_, "SELECT path FROM parameters WHERE campaign = ?1 ORDER BY position");
+    p.bind(1, campaign);
+    while (p.step()) paths.push_back(p.text(0));
+  }
+  if (r.values.size() != paths.size()) throw StoreError("a planned run has the wrong number of parameters");
+  Transaction t(db_);
+  {
+    Stmt find(db_, "SELECT id FROM runs WHERE campaign = ?1 AND param_hash = ?2");
+    find.bind(1, campaign).bind(2, r.param_hash);
+    if (find.step()) return find.i64(0);  // the transaction rolls back: nothing was changed
+  }
+  Stmt next(db_, "SELECT coalesce(max(design_index) + 1, 0) FROM design_points WHERE campaign = ?1");
+  next.bind(1, campaign).step();
+  const std::int64_t index = next.i64(0);
+  std::string sql = "INSERT INTO runs (campaign, design_index, param_hash, params, queued";
+  for (const auto& p : paths) sql += ", " + quote_id(p);
+  sql += ") VALUES (?1, ?2, ?3, ?4, strftime('%Y-%m-%dT%H:%M:%fZ', 'now')";
+  for (size_t i = 0; i < paths.size(); ++i) sql += ", ?" + std::to_string(5 + i);
+  sql += ")";
+  Stmt ins(db_, sql);
+  ins.bind(1, campaign).bind(2, index).bind(3, r.param_hash).bind(4, r.params_json);
+  for (size_t i = 0; i < r.values.size(); ++i) ins.bind(static_cast<int>(5 + i), r.values[i]);
+  ins.run();
+  const std::int64_t id = sqlite3_last_insert_rowid(db_);
+  Stmt point(db_, "INSERT INTO design_points (campaign, design_index, run) VALUES (?1, ?2, ?3)");
+  point.bind(1, campaign).bind(2, index).bind(3, id).run();
+  Stmt size(db_, "UPDATE campaigns SET design_size = ?2 WHERE id = ?1");
+  size.bind(1, campaign).bind(2, index + 1).run();
+  t.commit();
+  return id;
+}
+
+std::optional<StoredRun> CampaignStore::find_run(std::int64_t campaign, const std::string& param_hash) {
+  Stmt s(db_,
+         "SELECT id, design_index, status, coalesce(message, ''), attempts, coalesce(wall_s, 0), "
+         "coalesce(run_dir, ''), coalesce(h5_path, '') FROM runs WHERE campaign = ?1 AND param_hash = ?2");
+  s.bind(1, campaign).bind(2, param_hash);
+  if (!s.step()) return std::nullopt;
+  StoredRun r;
+  r.id = s.i64(0);
+  r.design_index = s.i64(1);
+  r.status = run_status_from(s.text(2)).value_or(RunStatus::kFailed);
+  r.message = s.text(3);
+  r.attempts = s.i64(4);
+  r.wall_s = s.f64(5);
+  r.run_dir = s.text(6);
+  r.h5_path = s.text(7);
+  return r;
+}
+
+RunTicket CampaignStore::claim_run(std::int64_t run_id, const std::string& host, const std::string& worker) {
+  Transaction t(db_);
+  Stmt s(db_,
+         "UPDATE runs SET status = 'running', attempts = attempts + 1, "
+         "started = strftime('%Y-%m-%dT%H:%M:%fZ', 'now'), finished = NULL, message = NULL, host = ?2, worker = ?3 "
+         "WHERE id = ?1 AND status = 'pending' RETURNING design_index, attempts");
+  s.bind(1, run_id).bind(2, host).bind(3, worker);
+  if (!s.step()) throw StoreError("run " + std::to_string(run_id) + " is not pending");
+  RunTicket ticket{run_id, s.i64(0), s.i64(1)};
+  s.run();
+  t.commit();
+  return ticket;
+}
+
+void CampaignStore::record_evaluation(std::int64_t campaign, const Evaluation& e) {
+  Transaction t(db_);
+  Stmt s(db_,
+         "INSERT OR REPLACE INTO evaluations (campaign, phase, start, seq, run, params, value, terms) "
+         "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8)");
+  s.bind(1, campaign).bind(2, e.phase).bind(3, e.start).bind(4, e.seq);
+  e.run > 0 ? s.bind(5, e.run) : s.bind_null(5);
+  s.bind(6, e.params_json);
+  std::isfinite(e.value) ? s.bind(7, e.value) : s.bind_null(7);
+  s.bind(8, e.terms_json).run();
+  t.commit();
+}
+
+std::vector<Evaluation> CampaignStore::evaluations(std::int64_t campaign) {
+  Stmt s(db_,
+         "SELECT phase, start, seq, coalesce(run, 0), params, value, coalesce(terms, '{}') FROM evaluations "
+         "WHERE campaign = ?1 ORDER BY phase, start, seq");
+  s.bind(1, campaign);
+  std::vector<Evaluation> out;
+  while (s.step()) {
+    Evaluation e;
+    e.phase = s.text(0);
+    e.start = s.i64(1);
+    e.seq = s.i64(2);
+    e.run = s.i64(3);
+    e.params_json = s.text(4);
+    e.value = s.null(5) ? std::nan("") : s.f64(5);
+    e.terms_json = s.text(6);
+    out.push_back(std::move(e));
+  }
+  return out;
 }
 
 StatusSummary CampaignStore::summary(std::int64_t campaign) {

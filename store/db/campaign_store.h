@@ -8,6 +8,9 @@
 //        "<parameter path>"...)        one typed column per parameter path, REAL or TEXT
 //   design_points(campaign, design_index, run)      design rows -> runs (a repeated point is run once)
 //   metrics(run, name, value)
+//   evaluations(campaign, phase, start, seq, run, params, value, terms)   an optimizer's objective evaluations
+//        (calibrations, whose runs are added one at a time as they are evaluated); added to version 1 files
+//        when they are opened for writing
 // Views: run_results (one row per run, its parameters and its metrics as a JSON object) and, per campaign,
 // "results_<campaign>" with one column per parameter and per metric.
 #pragma once
@@ -83,6 +86,31 @@ struct RunOutcome {
   std::vector<std::pair<std::string, double>> metrics;
 };
 
+// A run as the store has it (a calibration looks its points up before running them).
+struct StoredRun {
+  std::int64_t id = 0;
+  std::int64_t design_index = 0;
+  RunStatus status = RunStatus::kPending;
+  std::string message;
+  std::int64_t attempts = 0;
+  double wall_s = 0.0;
+  std::string run_dir;
+  std::string h5_path;
+};
+
+// One objective evaluation of an optimizer: `phase` ("optimize", "polish", "profile"), `start` (its
+// multi-start index, or the profiled parameter), `seq` (the order within them); the same triple is the same
+// evaluation, so replaying a calibration after a restart rewrites rows rather than adding them.
+struct Evaluation {
+  std::string phase;
+  std::int64_t start = 0;
+  std::int64_t seq = 0;
+  std::int64_t run = 0;     // 0: no run (a failed start-up)
+  std::string params_json;  // every free parameter, also those that need no run (a time shift)
+  double value = 0.0;
+  std::string terms_json;   // the objective's terms
+};
+
 struct StatusSummary {
   std::map<RunStatus, std::int64_t> counts;
   struct Failure {
@@ -129,6 +157,15 @@ class CampaignStore {
   void release_run(std::int64_t run_id);
   // The end of a run: status, message, cost and metrics in one transaction.
   void record_outcome(std::int64_t run_id, const RunOutcome& outcome);
+
+  // Runs added one at a time (a calibration: the design is not known in advance). add_run adds `run` as
+  // pending, as the next design point, unless a run with its parameter hash exists; returns the run's id.
+  std::int64_t add_run(std::int64_t campaign, const PlannedRun& run);
+  std::optional<StoredRun> find_run(std::int64_t campaign, const std::string& param_hash);
+  // Marks that run `running` as claim_next does; it must be pending.
+  RunTicket claim_run(std::int64_t run_id, const std::string& host, const std::string& worker);
+  void record_evaluation(std::int64_t campaign, const Evaluation& e);
+  std::vector<Evaluation> evaluations(std::int64_t campaign);
 
   StatusSummary summary(std::int64_t campaign);
   // One row per design point: campaign, design_index, run id, status, message, parameters, metrics, cost.

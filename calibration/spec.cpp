@@ -1,0 +1,555 @@
+// Calibration spec JSON -> CalibrationSpec, checked once here (fields, ranges, scene paths, target records).
+#include "calibration/spec.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <set>
+#include <sstream>
+
+#include "calibration/objective.h"
+#include "campaigns/gauge_model.h"
+#include "campaigns/spec.h"
+#include "common/errors.h"
+#include "solver/scene.h"
+
+namespace flume::calibration {
+namespace {
+
+using json = nlohmann::json;
+namespace fs = std::filesystem;
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+std::string fmt(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
+const char* type_name(const json& j) {
+  switch (j.type()) {
+    case json::value_t::null:
+      return "null";
+    case json::value_t::boolean:
+      return "a boolean";
+    case json::value_t::string:
+      return "a string";
+    case json::value_t::array:
+      return "an array";
+    case json::value_t::object:
+      return "an object";
+    default:
+      return "a number";
+  }
+}
+
+// A JSON object being read; finish() rejects fields nobody asked for, so a typo is an error.
+class Reader {
+ public:
+  Reader(const json& j, std::string path, std::string file)
+      : j_(j), path_(std::move(path)), file_(std::move(file)) {
+    if (!j_.is_object()) fail("", std::string("must be an object, got ") + type_name(j_));
+  }
+  [[noreturn]] void fail(const std::string& key, const std::string& what) const {
+    throw InputError(file_, join(key), what);
+  }
+  std::string join(const std::string& key) const {
+    if (key.empty()) return path_;
+    return path_.empty() ? key : path_ + "." + key;
+  }
+  bool has(const std::string& key) const { return j_.contains(key); }
+  const json& raw(const std::string& key) {
+    used_.insert(key);
+    return j_.at(key);
+  }
+  double number(const std::string& key, std::optional<double> def, double lo = -kInf, double hi = kInf,
+                bool lo_open = false) {
+    const std::string range = std::string(lo_open ? "(" : "[") + (std::isinf(lo) ? "-inf" : fmt(lo)) + ", " +
+                              (std::isinf(hi) ? "inf)" : fmt(hi) + "]");
+    if (!has(key)) {
+      if (!def) fail(key, "is required (a number in " + range + ")");
+      return *def;
+    }
+    const json& v = raw(key);
+    if (!v.is_number()) fail(key, std::string("must be a number in " + range + ", got ") + type_name(v));
+    const double x = v.get<double>();
+    if (!std::isfinite(x) || (lo_open ? !(x > lo) : !(x >= lo)) || !(x <= hi))
+      fail(key, "must be in " + range + " (got " + fmt(x) + ")");
+    return x;
+  }
+  std::int64_t integer(const std::string& key, std::int64_t def, std::int64_t lo, std::int64_t hi) {
+    const std::string range = "[" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
+    if (!has(key)) return def;
+    const json& v = raw(key);
+    if (!v.is_number() || std::floor(v.get<double>()) != v.get<double>())
+      fail(key, "must be an integer in " + range + ", got " +
+                    (v.is_number() ? fmt(v.get<double>()) : type_name(v)));
+    const double x = v.get<double>();
+    if (x < static_cast<double>(lo) || x > static_cast<double>(hi))
+      fail(key, "must be in " + range + " (got " + fmt(x) + ")");
+    return static_cast<std::int64_t>(x);
+  }
+  std::string string(const std::string& key, std::optional<std::string> def) {
+    if (!has(key)) {
+      if (!def) fail(key, "is required (a string)");
+      return *def;
+    }
+    const json& v = raw(key);
+    if (!v.is_string()) fail(key, std::string("must be a string, got ") + type_name(v));
+    return v.get<std::string>();
+  }
+  std::string choice(const std::string& key, std::optional<std::string> def,
+                     const std::vector<std::string>& options) {
+    std::string allowed;
+    for (const auto& o : options) allowed += (allowed.empty() ? "" : "|") + o;
+    if (!has(key)) {
+      if (!def) fail(key, "is required (one of " + allowed + ")");
+      return *def;
+    }
+    const json& v = raw(key);
+    if (!v.is_string() || std::find(options.begin(), options.end(), v.get<std::string>()) == options.end())
+      fail(key, "must be one of " + allowed + " (got " + v.dump() + ")");
+    return v.get<std::string>();
+  }
+  Reader object(const std::string& key) {
+    static const json empty = json::object();
+    return has(key) ? Reader(raw(key), join(key), file_) : Reader(empty, join(key), file_);
+  }
+  const json& array(const std::string& key) {
+    static const json empty = json::array();
+    if (!has(key)) return empty;
+    const json& v = raw(key);
+    if (!v.is_array()) fail(key, std::string("must be an array, got ") + type_name(v));
+    return v;
+  }
+  void accept(const std::string& key) { used_.insert(key); }
+  void finish() const {
+    for (auto it = j_.begin(); it != j_.end(); ++it) {
+      if (used_.count(it.key())) continue;
+      std::string known;
+      for (const auto& k : used_) known += (known.empty() ? "" : ", ") + k;
+      fail(it.key(), "unknown field" + (known.empty() ? std::string() : " (read here: " + known + ")"));
+    }
+  }
+
+ private:
+  const json& j_;
+  std::string path_;
+  std::string file_;
+  std::set<std::string> used_;
+};
+
+struct AlgorithmInfo {
+  const char* name;
+  bool local;
+};
+// The names the spec accepts; optimize.cpp maps each to its NLopt algorithm.
+const std::vector<AlgorithmInfo>& algorithms() {
+  static const std::vector<AlgorithmInfo> list = {{"BOBYQA", true}, {"COBYLA", true},   {"NELDERMEAD", true},
+                                                  {"SBPLX", true},  {"CRS2_LM", false}, {"DIRECT_L", false},
+                                                  {"ISRES", false}, {"MLSL", false}};
+  return list;
+}
+
+std::vector<std::string> local_names() {
+  std::vector<std::string> out;
+  for (const auto& a : algorithms())
+    if (a.local) out.push_back(a.name);
+  return out;
+}
+
+std::string read_text(const std::string& file) {
+  std::ifstream in(file);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+std::string resolve(const std::string& path, const std::string& base_dir) {
+  fs::path p(path);
+  std::error_code ec;
+  if (p.is_absolute()) return p.lexically_normal().string();
+  if (fs::exists(p, ec)) return fs::absolute(p, ec).lexically_normal().string();
+  if (!base_dir.empty() && fs::exists(fs::path(base_dir) / p, ec))
+    return fs::absolute(fs::path(base_dir) / p, ec).lexically_normal().string();
+  return "";
+}
+
+// Deterministic start points in the unit cube: a Halton sequence (bases 2, 3, 5, ...) shifted by a
+// seed-derived offset modulo 1 (Cranley & Patterson 1976), so starts spread evenly and reproducibly.
+std::vector<std::vector<double>> halton_points(size_t count, size_t dim, std::uint64_t seed) {
+  static const int primes[] = {2, 3, 5, 7, 11, 13, 17, 19, 23, 29, 31, 37, 41, 43, 47, 53, 59, 61, 67, 71};
+  std::uint64_t z = seed + 0x9e3779b97f4a7c15ull;
+  auto splitmix = [&] {
+    std::uint64_t x = (z += 0x9e3779b97f4a7c15ull);
+    x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
+    x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
+    return static_cast<double>((x ^ (x >> 31)) >> 11) * 0x1.0p-53;
+  };
+  std::vector<double> shift(dim);
+  for (auto& s : shift) s = splitmix();
+  std::vector<std::vector<double>> out;
+  for (size_t i = 1; i <= count; ++i) {
+    std::vector<double> p(dim);
+    for (size_t d = 0; d < dim; ++d) {
+      const int b = primes[d % 20];
+      double f = 1, r = 0;
+      for (size_t n = i; n > 0; n /= b) {
+        f /= b;
+        r += f * static_cast<double>(n % b);
+      }
+      p[d] = std::fmod(r + shift[d], 1.0);
+    }
+    out.push_back(p);
+  }
+  return out;
+}
+
+}  // namespace
+
+double FreeParameter::to_unit(double value) const {
+  if (scale == Scale::kLog) return std::log(value / lower) / std::log(upper / lower);
+  return (value - lower) / (upper - lower);
+}
+
+double FreeParameter::from_unit(double u) const {
+  u = std::clamp(u, 0.0, 1.0);
+  if (scale == Scale::kLog) return lower * std::pow(upper / lower, u);
+  return lower + u * (upper - lower);
+}
+
+size_t CalibrationSpec::run_parameter_count() const {
+  return static_cast<size_t>(std::count_if(parameters.begin(), parameters.end(),
+                                           [](const FreeParameter& p) { return p.needs_run; }));
+}
+
+std::vector<std::string> algorithm_names() {
+  std::vector<std::string> out;
+  for (const auto& a : algorithms()) out.push_back(a.name);
+  return out;
+}
+
+bool is_local_algorithm(const std::string& name) {
+  for (const auto& a : algorithms())
+    if (name == a.name) return a.local;
+  return false;
+}
+
+CalibrationSpec parse_calibration_spec(const std::string& json_text, const std::string& file_label,
+                                       const std::string& base_dir) {
+  json root_json;
+  try {
+    root_json = json::parse(json_text);
+  } catch (const json::parse_error& e) {
+    throw InputError(file_label, "", std::string("not valid JSON: ") + e.what());
+  }
+  CalibrationSpec spec;
+  spec.file = file_label;
+  Reader root(root_json, "", spec.file);
+  json identity = json::object();  // what the results depend on; see CalibrationSpec::canonical
+
+  spec.name = root.string("name", std::nullopt);
+  if (spec.name.empty() || spec.name.size() > 64 ||
+      spec.name.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_.-") !=
+          std::string::npos)
+    root.fail("name", "must be 1 to 64 characters from A-Z a-z 0-9 _ . - (got '" + spec.name + "')");
+  identity["name"] = spec.name;
+  spec.description = root.string("description", std::string());
+
+  // The simulator: a scene (default the Waseda 2D slice) or the `gauge` test stand-in.
+  if (root.has("scene") && root.has("model")) root.fail("model", "give either scene or model, not both");
+  if (root.has("model")) {
+    spec.model = root.choice("model", std::nullopt, {"gauge"});
+    identity["model"] = spec.model;
+  } else {
+    const std::string scene = root.string("scene", std::string("scenes/waseda/waseda_2d.json"));
+    spec.scene = resolve(scene, base_dir);
+    if (spec.scene.empty())
+      root.fail("scene",
+                "cannot open '" + scene + "' (looked in the current directory and next to the spec)");
+    identity["scene"] = spec.scene;
+    identity["scene_content"] =
+        campaigns::text_hash(read_text(spec.scene));  // an edited scene is a new scene
+  }
+
+  {
+    Reader o = root.object("overrides");
+    if (root.has("overrides"))
+      for (auto it = root_json["overrides"].begin(); it != root_json["overrides"].end(); ++it) {
+        o.accept(it.key());
+        spec.overrides.emplace_back(it.key(), it.value().dump());
+      }
+    o.finish();
+    identity["overrides"] = root_json.value("overrides", json::object());
+  }
+
+  // Free parameters.
+  const json& params = root.array("parameters");
+  if (params.empty())
+    root.fail("parameters", "is required: a non-empty array of {path, lower, upper, start}");
+  std::set<std::string> paths;
+  for (size_t i = 0; i < params.size(); ++i) {
+    Reader p(params[i], "parameters." + std::to_string(i), spec.file);
+    FreeParameter fp;
+    fp.path = p.string("path", std::nullopt);
+    if (fp.path.empty()) p.fail("path", "must not be empty");
+    if (fp.path == kTimeShiftPath) p.fail("path", "the time shift is set with objective.time_shift");
+    if (!paths.insert(fp.path).second) p.fail("path", "'" + fp.path + "' is already a free parameter");
+    for (const auto& [path, value] : spec.overrides)
+      if (path == fp.path) p.fail("path", "'" + fp.path + "' is also a fixed override");
+    fp.scale =
+        p.choice("scale", std::string("linear"), {"linear", "log"}) == "log" ? Scale::kLog : Scale::kLinear;
+    fp.lower =
+        p.number("lower", std::nullopt, fp.scale == Scale::kLog ? 0.0 : -kInf, kInf, fp.scale == Scale::kLog);
+    fp.upper = p.number("upper", std::nullopt, fp.lower, kInf, true);
+    fp.start = p.number("start", std::nullopt, fp.lower, fp.upper);
+    p.finish();
+    spec.parameters.push_back(fp);
+  }
+  identity["parameters"] = params;
+
+  // Objective.
+  {
+    if (!root.has("objective"))
+      root.fail("objective", "is required (an object with window [t0, t1] at least)");
+    Reader o = root.object("objective");
+    const json& w = o.array("window");
+    if (w.size() != 2 || !w[0].is_number() || !w[1].is_number() || !(w[0].get<double>() >= 0) ||
+        !(w[1].get<double>() > w[0].get<double>()))
+      o.fail("window", "is required: [t0, t1] in s with 0 <= t0 < t1");
+    spec.objective.window_start_s = w[0].get<double>();
+    spec.objective.window_end_s = w[1].get<double>();
+    spec.objective.peak_weight = o.number("peak_weight", 0.0, 0.0, 1e6);
+    spec.objective.arrival_weight_m_per_s = o.number("arrival_weight_m_per_s", 0.0, 0.0, 1e6);
+    spec.objective.arrival_threshold_m = o.number("arrival_threshold_m", 0.005, 0.0, 1.0, true);
+    if (o.has("time_shift")) {
+      Reader s = o.object("time_shift");
+      FreeParameter fp;
+      fp.path = kTimeShiftPath;
+      fp.needs_run = false;
+      fp.lower = s.number("lower", std::nullopt, -60.0, 60.0);
+      fp.upper = s.number("upper", std::nullopt, fp.lower, 60.0, true);
+      fp.start = s.number("start", 0.0, fp.lower, fp.upper);
+      s.finish();
+      spec.parameters.push_back(fp);
+    }
+    o.finish();
+    identity["objective"] = root_json["objective"];
+  }
+
+  // Algorithm and budgets.
+  {
+    if (!root.has("algorithm"))
+      root.fail("algorithm", "is required (an object with name and max_evaluations)");
+    Reader a = root.object("algorithm");
+    auto& al = spec.algorithm;
+    al.name = a.choice("name", std::nullopt, algorithm_names());
+    if (al.name == "MLSL") {
+      al.local = a.choice("local", std::nullopt, local_names());
+    } else if (a.has("local")) {
+      a.fail("local", "is MLSL's local optimizer; " + al.name + " takes none");
+    }
+    if (a.has("polish")) {
+      if (is_local_algorithm(al.name))
+        a.fail("polish", "follows a global algorithm; " + al.name + " is local");
+      al.polish = a.choice("polish", std::nullopt, local_names());
+    }
+    al.max_evaluations = static_cast<int>(a.integer("max_evaluations", -1, 1, 1000000));
+    if (al.max_evaluations < 0)
+      a.fail("max_evaluations", "is required (an integer in [1, 1000000], per start)");
+    al.polish_evaluations = static_cast<int>(a.integer("polish_evaluations", 50, 1, 1000000));
+    al.max_time_s = a.number("max_time_s", 0.0, 0.0, 1e9);
+    al.xtol_abs = a.number("xtol_abs", 1e-4, 0.0, 0.5);
+    al.ftol_abs = a.number("ftol_abs", 0.0, 0.0, 1e3);
+    al.initial_step = a.number("initial_step", 0.1, 0.0, 0.5, true);
+    al.population = static_cast<int>(a.integer("population", 0, 0, 100000));
+    al.seed = static_cast<std::uint64_t>(a.integer("seed", 1, 0, 4294967295LL));
+    a.finish();
+    const size_t dim = spec.parameters.size();
+    if ((al.name == "BOBYQA" || al.polish == "BOBYQA" || al.local == "BOBYQA") && dim < 2)
+      a.fail(al.name == "BOBYQA" ? "name" : (al.polish == "BOBYQA" ? "polish" : "local"),
+             "BOBYQA needs at least 2 free parameters (NLopt); use SBPLX or COBYLA for one");
+    json id = root_json["algorithm"];
+    id.erase("max_evaluations");  // budgets: see AlgorithmSpec
+    id.erase("polish_evaluations");
+    id.erase("max_time_s");
+    identity["algorithm"] = id;
+  }
+
+  // Starts: the parameters' own, explicit ones, and quasi-random ones.
+  {
+    std::vector<double> first;
+    for (const auto& p : spec.parameters) first.push_back(p.start);
+    spec.starts.push_back(first);
+    const json& starts = root.array("starts");
+    for (size_t i = 0; i < starts.size(); ++i) {
+      Reader s(starts[i], "starts." + std::to_string(i), spec.file);
+      std::vector<double> x;
+      for (const auto& p : spec.parameters) {
+        const std::string key = p.path == kTimeShiftPath ? "objective.time_shift_s" : p.path;
+        x.push_back(s.number(key, p.start, p.lower, p.upper));
+      }
+      s.finish();
+      spec.starts.push_back(x);
+    }
+    if (root.has("multi_start")) {
+      Reader m = root.object("multi_start");
+      const auto count = static_cast<size_t>(m.integer("random", 0, 0, 1000));
+      const auto seed = static_cast<std::uint64_t>(m.integer("seed", 1, 0, 4294967295LL));
+      m.finish();
+      for (const auto& u : halton_points(count, spec.parameters.size(), seed)) {
+        std::vector<double> x;
+        for (size_t j = 0; j < u.size(); ++j) x.push_back(spec.parameters[j].from_unit(u[j]));
+        spec.starts.push_back(x);
+      }
+    }
+    identity["starts"] = root_json.value("starts", json::array());
+    identity["multi_start"] = root_json.value("multi_start", json::object());
+  }
+
+  {
+    Reader p = root.object("profile");
+    spec.profile.points = static_cast<int>(p.integer("points", 5, 0, 100));
+    spec.profile.span = p.number("span", 0.15, 0.0, 1.0, true);
+    p.finish();
+  }
+  {
+    Reader r = root.object("run");
+    spec.run.time_limit_s = r.number("time_limit_s", 3600.0, 0.0, 30.0 * 86400, true);
+    spec.run.threads = static_cast<int>(r.integer("threads", 1, 1, 1024));
+    spec.run.output_dir = r.string("output_dir", std::string());
+    r.finish();
+  }
+
+  // Targets need the objective window and the simulator's gauges, so the simulator is checked first.
+  const json& targets = root.array("targets");
+  root.finish();
+  if (targets.empty()) root.fail("targets", "is required: a non-empty array of {file, gauges?, weight?}");
+
+  // The simulator accepts the overrides and each parameter at its bounds and start; which gauges it has.
+  auto sets_with = [&](size_t j, double value) {
+    std::vector<std::pair<std::string, std::string>> sets = spec.overrides;
+    sets.emplace_back(spec.parameters[j].path, json(value).dump());
+    return sets;
+  };
+  if (!spec.model.empty()) {
+    std::string problem = campaigns::check_gauge_inputs(spec.overrides);
+    if (!problem.empty())
+      throw InputError(spec.file, "overrides." + problem.substr(0, problem.find(':')),
+                       problem.substr(problem.find(": ") + 2));
+    for (size_t j = 0; j < spec.parameters.size(); ++j) {
+      if (!spec.parameters[j].needs_run) continue;
+      for (double v : {spec.parameters[j].lower, spec.parameters[j].upper, spec.parameters[j].start}) {
+        problem = campaigns::check_gauge_inputs(sets_with(j, v));
+        if (!problem.empty())
+          throw InputError(
+              spec.file, "parameters." + std::to_string(j),
+              "model gauge rejects " + spec.parameters[j].path + " = " + fmt(v) + ": " + problem);
+      }
+    }
+    spec.gauges = campaigns::gauge_model_gauges();
+    spec.record_end_s = campaigns::gauge_model_end_time(spec.overrides);
+  } else {
+    const std::string text = read_text(spec.scene);
+    auto load = [&](const std::vector<std::pair<std::string, std::string>>& sets) {
+      std::vector<Override> o;
+      for (const auto& [path, value] : sets) o.push_back({path, value});
+      return parse_scene_text(text, spec.scene, o);
+    };
+    Scene scene;
+    try {
+      scene = load(spec.overrides);
+    } catch (const InputError& e) {
+      throw InputError(spec.file, "overrides", "the scene rejects them: " + std::string(e.what()));
+    }
+    for (size_t j = 0; j < spec.parameters.size(); ++j) {
+      if (!spec.parameters[j].needs_run) continue;
+      for (double v : {spec.parameters[j].lower, spec.parameters[j].upper, spec.parameters[j].start}) {
+        try {
+          load(sets_with(j, v));
+        } catch (const InputError& e) {
+          throw InputError(spec.file, "parameters." + std::to_string(j),
+                           "the scene rejects " + spec.parameters[j].path + " = " + fmt(v) + ": " + e.what());
+        }
+      }
+    }
+    for (const auto& g : scene.instruments.gauges) spec.gauges.push_back(g.name);
+    spec.record_end_s = scene.solver.end_time;
+  }
+  // The shifted simulation must cover the window: sim(t - shift) for t up to the window's end.
+  double max_back_shift = 0;
+  for (const auto& p : spec.parameters)
+    if (!p.needs_run) max_back_shift = std::min(0.0, p.lower);
+  if (spec.record_end_s < spec.objective.window_end_s - max_back_shift)
+    throw InputError(spec.file, "objective.window",
+                     "ends at " + fmt(spec.objective.window_end_s) +
+                         " s but the simulation records only to " + fmt(spec.record_end_s) +
+                         " s (solver.end_time" +
+                         (max_back_shift < 0 ? ", with the time shift's lower bound" : std::string()) +
+                         "); shorten the window or set solver.end_time in overrides");
+
+  std::set<std::string> fitted;
+  json target_ids = json::array();
+  for (size_t i = 0; i < targets.size(); ++i) {
+    const std::string field = "targets." + std::to_string(i);
+    Reader t(targets[i], field, spec.file);
+    TargetFile tf;
+    const std::string file = t.string("file", std::nullopt);
+    tf.file = resolve(file, base_dir);
+    if (tf.file.empty())
+      t.fail("file", "cannot open '" + file + "' (looked in the current directory and next to the spec)");
+    tf.weight = t.number("weight", 1.0, 0.0, 1e6, true);
+    if (t.has("gauge") && t.has("gauges"))
+      t.fail("gauges", "give gauge (one column) or gauges (a map), not both");
+    if (t.has("gauge")) {
+      tf.gauge_columns.emplace_back(t.string("gauge", std::nullopt), "");
+    } else if (t.has("gauges")) {
+      Reader g = t.object("gauges");
+      for (auto it = targets[i]["gauges"].begin(); it != targets[i]["gauges"].end(); ++it) {
+        g.accept(it.key());
+        if (!it.value().is_string()) g.fail(it.key(), "must be the name of a column of " + file);
+        tf.gauge_columns.emplace_back(it.key(), it.value().get<std::string>());
+      }
+      g.finish();
+      if (tf.gauge_columns.empty()) t.fail("gauges", "maps no gauge");
+    }
+    t.finish();
+    std::string gauge_list;
+    for (const auto& g : spec.gauges) gauge_list += (gauge_list.empty() ? "" : ", ") + g;
+    for (const auto& [gauge, column] : tf.gauge_columns)
+      if (std::find(spec.gauges.begin(), spec.gauges.end(), gauge) == spec.gauges.end())
+        t.fail(t.has("gauge") ? "gauge" : "gauges." + gauge, "'" + gauge + "' is not a gauge of the " +
+                                                                 (spec.model.empty() ? "scene" : "model") +
+                                                                 " (its gauges: " + gauge_list + ")");
+    for (auto& r : read_target_csv(tf.file, tf.gauge_columns, spec.gauges, spec.objective.window_start_s,
+                                   spec.objective.window_end_s, tf.weight, field)) {
+      if (!fitted.insert(r.gauge).second)
+        t.fail("file", "gauge " + r.gauge + " already has a target record; give each gauge one");
+      spec.targets.push_back(std::move(r));
+    }
+    spec.target_files.push_back(tf);
+    target_ids.push_back(
+        {{"file", tf.file}, {"content", campaigns::text_hash(read_text(tf.file))}, {"spec", targets[i]}});
+  }
+  identity["targets"] = target_ids;
+  Objective check(spec.objective, spec.targets,
+                  spec.file);  // targets without an arrival, when one is weighted
+
+  spec.canonical = identity.dump();
+  spec.hash = campaigns::text_hash(spec.canonical);
+  return spec;
+}
+
+CalibrationSpec load_calibration_spec(const std::string& file) {
+  std::ifstream in(file);
+  if (!in) throw InputError(file, "", "cannot open the calibration spec");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return parse_calibration_spec(ss.str(), file, fs::path(file).parent_path().string());
+}
+
+}  // namespace flume::calibration
