@@ -166,7 +166,7 @@ class Driver {
     std::string phase;
     int start;
     int seq = 0;
-    std::vector<double> best_u;
+    std::vector<double> best_u, first_u;
     double best = INFINITY;
     ObjectiveTerms best_terms;
     std::string stop;
@@ -185,6 +185,7 @@ class Driver {
       throw nlopt::forced_stop();
     }
     std::vector<double> u(x, x + n);
+    if (c->first_u.empty()) c->first_u = u;
     try {
       const Point p = d.evaluate(u, c->phase, c->start, c->seq++);
       if (p.terms.value < c->best) {
@@ -265,6 +266,8 @@ class Driver {
     }
     out.value = c.best;
     out.terms = c.best_terms;
+    out.best_u = c.best_u;
+    out.first_u = c.first_u;
     for (size_t j = 0; j < c.best_u.size(); ++j)
       out.best.push_back(spec_.parameters[j].from_unit(c.best_u[j]));
     return out;
@@ -482,6 +485,7 @@ int run_calibration(const CalibrationSpec& spec, const CalibrateOptions& options
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
   Evaluator evaluator(spec, db, campaign, options.db_file);
+  evaluator.set_stop_check([] { return g_signal != 0; });
   Driver driver(spec, options, evaluator, campaign);
 
   const int n_starts = static_cast<int>(spec.starts.size());
@@ -520,10 +524,11 @@ int run_calibration(const CalibrationSpec& spec, const CalibrateOptions& options
     const auto& b = result.starts[static_cast<size_t>(best)];
     result.best = b.best;
     result.best_terms = b.terms;
-    const auto ub = driver.to_unit(b.best);
+    result.best_u = b.best_u;
+    const auto& ub = b.best_u;
     for (auto& s : result.starts) {
       if (s.best.empty()) continue;
-      const auto us = driver.to_unit(s.best);
+      const auto& us = s.best_u;
       double d = 0;
       for (size_t j = 0; j < us.size(); ++j) d = std::max(d, std::fabs(us[j] - ub[j]));
       s.same_optimum = d <= 0.02;
@@ -538,11 +543,13 @@ int run_calibration(const CalibrationSpec& spec, const CalibrateOptions& options
         for (auto& t : shifted.time) t += bp.shift;  // the fitted record as it was compared
         result.best_records[g] = shifted;
       }
-      auto sp = driver.evaluate_cached(driver.to_unit(spec.starts[0]));
-      for (const auto& [g, rec] : sp.run->gauges) {
-        SimRecord shifted = rec;
-        for (auto& t : shifted.time) t += sp.shift;
-        result.start_records[g] = shifted;
+      if (!result.starts[0].first_u.empty()) {
+        auto sp = driver.evaluate_cached(result.starts[0].first_u);
+        for (const auto& [g, rec] : sp.run->gauges) {
+          SimRecord shifted = rec;
+          for (auto& t : shifted.time) t += sp.shift;
+          result.start_records[g] = shifted;
+        }
       }
     } catch (const Stopped&) {
       result.status = "stopped";

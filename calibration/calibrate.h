@@ -23,6 +23,9 @@ struct CalibrateOptions {
 struct StartResult {
   int index = 0;
   std::vector<double> from, best;  // physical values, spec parameter order
+  std::vector<double> best_u,
+      first_u;  // unit coordinates of the best and the first point evaluated (exact:
+                // converting back from physical values may miss the stored run by an ulp)
   double value = 0;
   ObjectiveTerms terms;
   int evaluations = 0;  // the optimizer's (repeats included)
@@ -55,11 +58,11 @@ struct CalibrationResult {
   std::string status;  // "finished", "time budget", "stopped"
   std::vector<StartResult> starts;
   int best_start = 0;
-  std::vector<double> best;
+  std::vector<double> best, best_u;
   ObjectiveTerms best_terms;
   std::int64_t best_run = 0;
   std::string best_run_dir;
-  std::map<std::string, SimRecord> best_records, start_records;  // fitted, and at the first start
+  std::map<std::string, SimRecord> best_records, start_records;  // fitted, and start 0's first evaluation
   std::vector<Profile> profiles;
   Identifiability identifiability;
   int optimizer_evaluations = 0, profile_evaluations = 0;

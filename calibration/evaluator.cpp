@@ -139,6 +139,7 @@ std::shared_ptr<const RunResult> Evaluator::execute(
   campaigns::Child child = campaigns::start_child(c);
   store::RunOutcome outcome;
   while (!campaigns::poll_child(child, outcome)) {
+    if (stop_check_ && stop_check_()) stop_ = true;
     if (stop_) {
       campaigns::kill_child(child);
       std::lock_guard<std::mutex> lock(mutex_);

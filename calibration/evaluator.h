@@ -7,6 +7,7 @@
 #include <atomic>
 #include <condition_variable>
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -49,6 +50,8 @@ class Evaluator {
 
   void request_stop() { stop_ = true; }
   bool stopping() const { return stop_; }
+  // Also polled while a run is in flight (a signal must not wait for an hour-long run to end).
+  void set_stop_check(std::function<bool()> check) { stop_check_ = std::move(check); }
 
   std::int64_t runs_executed() const { return executed_; }
   std::int64_t runs_reused() const { return reused_; }  // found finished in the store
@@ -68,6 +71,7 @@ class Evaluator {
   std::map<std::string, std::shared_ptr<const RunResult>> memo_;  // parameter hash -> result
   std::set<std::string> in_flight_;
   std::atomic<bool> stop_{false};
+  std::function<bool()> stop_check_;
   std::atomic<std::int64_t> executed_{0}, reused_{0};
 };
 

@@ -57,7 +57,7 @@ void write_report(const CalibrationSpec& spec, const CalibrateOptions& options, 
   const fs::path out(options.out_dir);
   namespace plot = flume::plot;
 
-  // fit.svg: one panel per gauge, target (markers), at the first start (dashed) and fitted (line).
+  // fit.svg: one panel per gauge: target (markers), start 0's first evaluation (dashed) and fitted (line).
   {
     const int n = static_cast<int>(objective.windows().size());
     plot::Figure fig(n, 1, 720, 300.0 * n);
@@ -79,7 +79,10 @@ void write_report(const CalibrationSpec& spec, const CalibrateOptions& options, 
         std::vector<double> t, e;
         clip(it->second, t, e);
         ax.line(t, e,
-                {.color = plot::palette(1), .width = 1.2, .dash = plot::Dash::kDashed, .label = "start 0"});
+                {.color = plot::palette(1),
+                 .width = 1.2,
+                 .dash = plot::Dash::kDashed,
+                 .label = "first evaluation"});
       }
       if (auto it = result.best_records.find(w.gauge); it != result.best_records.end()) {
         std::vector<double> t, e;

@@ -447,3 +447,30 @@ TEST(CalibrateInputs, MalformedSpecsAndRecordsExitTwoNamingTheField) {
   EXPECT_EQ(scalar(dir / "s.db", "SELECT sum(attempts) FROM runs"),
             scalar(dir / "s.db", "SELECT count(*) FROM runs"));
 }
+
+// SIGTERM stops the calibration at once, also in the middle of a run: the run is killed and put back to
+// pending, so the next job runs it (the store never holds a `running` run of a job that is gone).
+TEST(CalibrateResume, SigtermKillsTheRunInFlightAndLeavesItPending) {
+  const fs::path dir = test_dir();
+  make_target(dir, {"reservoir.forcing.t99_s=0.8", "reservoir.gate_height_m=0.085"}, 0, 5);
+  std::string spec = two_parameter_spec("term", R"({"name": "BOBYQA", "max_evaluations": 40})",
+                                        R"(, "profile": {"points": 0})");
+  const std::string model = R"("reservoir.forcing.model": "exponential")";
+  spec.replace(spec.find(model), model.size(), model + R"(, "sleep_s": 30)");
+  write_file(dir / "spec.json", spec);
+  const fs::path db = dir / "s.db";
+  const pid_t pid = spawn(flume_cmd({"calibrate", (dir / "spec.json").string(), "--db", db.string(), "--out",
+                                     (dir / "out").string()}),
+                          dir / "t.out", dir / "t.err");
+  ASSERT_GT(pid, 0);
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  while (std::chrono::steady_clock::now() < give_up &&
+         scalar(db, "SELECT count(*) FROM runs WHERE status = 'running'") != "1")
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  ASSERT_EQ(scalar(db, "SELECT count(*) FROM runs WHERE status = 'running'"), "1");
+  kill(pid, SIGTERM);
+  EXPECT_EQ(wait_for(pid, 10), 128 + SIGTERM) << "a 30 s run must not delay the stop";
+  EXPECT_EQ(scalar(db, "SELECT count(*) FROM runs WHERE status = 'running'"), "0");
+  EXPECT_EQ(scalar(db, "SELECT count(*) FROM runs WHERE status = 'pending'"), "1");
+  EXPECT_NE(read_file(dir / "t.err").find("run the same command again to resume"), std::string::npos);
+}
