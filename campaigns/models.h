@@ -10,6 +10,9 @@
 //             wave to the gauges. Its inputs are the scene's paths (reservoir.forcing.model|t99_s|table[.i.j],
 //             reservoir.gate_height_m, reservoir.fill_level_m, basin.still_water_m, solver.end_time), so a
 //             calibration spec moves from the stand-in to the scene unchanged. Not a model of the flume.
+//   debris:   SYNTHETIC stand-in for the coupled debris solver (not physics): D<k>.* debris metrics, a load
+//             cell and a gauge from friction, restitution, n_debris (3|6), wave_scale and obstacles.layout
+//             (0x0|5x1|5x2), shaped by Nistor et al. (2017) eqs. 58-59; lets the report be exercised.
 #pragma once
 #include <string>
 #include <utility>

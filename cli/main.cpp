@@ -8,6 +8,7 @@
 #include "calibration/commands.h"
 #include "campaigns/commands.h"
 #include "flume_version.h"
+#include "report/report.h"
 #include "solver/commands.h"
 
 namespace {
@@ -24,6 +25,7 @@ const std::vector<Command>& commands() {
       {"bench", flume::bench_main, "bench SCENE.json --steps N [--set path=value ...] [--threads N]"},
       {"check", flume::check_main, "check SCENE.json [--set path=value ...]   validate a scene, print a summary"},
       {"campaign", flume::campaign_main, "campaign run SPEC.json --db FILE [--workers N] | status --db FILE | export --db FILE --csv OUT"},
+      {"report", flume::report_main, "report --db FILE --campaign NAME --out DIR [--thresholds metric=v1,v2 ...]   HTML/JSON/CSV report"},
       {"model", flume::model_main, "model ishigami|test --out DIR [--set name=value ...]   analytic stand-ins for `run`"},
       {"calibrate", flume::calibration::calibrate_main, "calibrate SPEC.json --db FILE --out DIR [--workers N] | target RESULT.h5 --out CSV | history --db FILE"},
   };
