@@ -47,18 +47,23 @@ FLUME_HD int stencil_base(T x_grid, T& f) {
   return base;
 }
 
-// Tait/Murnaghan pressure from the volume ratio J: p = K/gamma (J^-gamma - 1).
+// Volumes are carried as the volumetric strain e = J - 1, not as J: water under a 0.2 m head has
+// e ~ -1e-4 at K = 2e7 Pa, which 1 + e stored in float would resolve to only three digits, and a step's
+// change (~1e-8) would be lost entirely. Every function below takes e and stays accurate as e -> 0.
+
+// Tait/Murnaghan pressure p = K/gamma (J^-gamma - 1), as K/gamma expm1(-gamma log1p(e)).
 template <typename T>
-FLUME_HD T tait_pressure(T J, T bulk_modulus, T gamma) {
-  return bulk_modulus / gamma * (std::pow(J, -gamma) - T(1));
+FLUME_HD T tait_pressure(T e, T bulk_modulus, T gamma) {
+  return bulk_modulus / gamma * std::expm1(-gamma * std::log1p(e));
 }
 
-// Stored energy per unit reference volume whose derivative is -p: W(J) = K/gamma [(J^(1-g) - 1)/(g - 1) + J - 1].
-// Used by the energy audit that flags an unstable run. gamma = 1 is the limit K (J - 1 - ln J).
+// Stored energy per unit reference volume whose derivative with respect to J is -p:
+// W = K/gamma [(J^(1-gamma) - 1)/(gamma - 1) + J - 1]; gamma = 1 is the limit K (J - 1 - ln J).
+// Used by the energy audit that flags an unstable run.
 template <typename T>
-FLUME_HD T tait_energy_density(T J, T bulk_modulus, T gamma) {
-  if (std::fabs(gamma - T(1)) < T(1e-6)) return bulk_modulus * (J - T(1) - std::log(J));
-  return bulk_modulus / gamma * ((std::pow(J, T(1) - gamma) - T(1)) / (gamma - T(1)) + J - T(1));
+FLUME_HD T tait_energy_density(T e, T bulk_modulus, T gamma) {
+  if (std::fabs(gamma - T(1)) < T(1e-6)) return bulk_modulus * (e - std::log1p(e));
+  return bulk_modulus / gamma * (std::expm1((T(1) - gamma) * std::log1p(e)) / (gamma - T(1)) + e);
 }
 
 // Wave speed of the linearised fluid, c = sqrt(K / rho), which sets the explicit step.
@@ -68,10 +73,10 @@ FLUME_HD T sound_speed(T bulk_modulus, T density) {
 }
 
 // Cauchy stress of the fluid: -p I + 2 mu dev(sym(grad v)), with grad v taken from the APIC matrix C
-// (for quadratic MLS-MPM, C is the velocity gradient estimate). Row-major D x D.
+// (for quadratic MLS-MPM, C is the velocity gradient estimate); e = J - 1. Row-major D x D.
 template <int D, typename T>
-FLUME_HD void fluid_stress(T J, const T* C, T bulk_modulus, T gamma, T viscosity, T* sigma) {
-  const T p = tait_pressure(J, bulk_modulus, gamma);
+FLUME_HD void fluid_stress(T e, const T* C, T bulk_modulus, T gamma, T viscosity, T* sigma) {
+  const T p = tait_pressure(e, bulk_modulus, gamma);
   T trace = 0;
   for (int a = 0; a < D; ++a) trace += C[a * D + a];
   for (int a = 0; a < D; ++a)
@@ -81,26 +86,45 @@ FLUME_HD void fluid_stress(T J, const T* C, T bulk_modulus, T gamma, T viscosity
     }
 }
 
-// det(I + dt C): the particle's volume change over one step.
+// det(I + dt C) - 1, the particle's volumetric strain over one step, summed from the invariants of dt C so
+// that nothing of size 1 is added and subtracted: 2D dt tr C + dt^2 det C; 3D dt tr C + dt^2 (sum of the
+// principal 2x2 minors) + dt^3 det C.
 template <int D, typename T>
-FLUME_HD T volume_ratio(const T* C, T dt) {
+FLUME_HD T volume_change(const T* C, T dt) {
   if constexpr (D == 2) {
-    const T a = T(1) + dt * C[0], b = dt * C[1], c = dt * C[2], d = T(1) + dt * C[3];
-    return a * d - b * c;
+    return dt * (C[0] + C[3]) + dt * dt * (C[0] * C[3] - C[1] * C[2]);
   } else {
-    const T m0 = T(1) + dt * C[0], m1 = dt * C[1], m2 = dt * C[2];
-    const T m3 = dt * C[3], m4 = T(1) + dt * C[4], m5 = dt * C[5];
-    const T m6 = dt * C[6], m7 = dt * C[7], m8 = T(1) + dt * C[8];
-    return m0 * (m4 * m8 - m5 * m7) - m1 * (m3 * m8 - m5 * m6) + m2 * (m3 * m7 - m4 * m6);
+    const T tr = C[0] + C[4] + C[8];
+    const T minors = C[0] * C[4] - C[1] * C[3] + C[0] * C[8] - C[2] * C[6] + C[4] * C[8] - C[5] * C[7];
+    const T det = C[0] * (C[4] * C[8] - C[5] * C[7]) - C[1] * (C[3] * C[8] - C[5] * C[6]) +
+                  C[2] * (C[3] * C[7] - C[4] * C[6]);
+    return dt * (tr + dt * (minors + dt * det));
   }
 }
 
 // J-bar antilocking with the linear mixing ratio psi (Bonus et al., eqs. 3-4): the new J blends the
 // grid-averaged J (Zhao et al. 2023's projection, taken from the previous step's particle J and carried
-// forward by this step's dJ) with the particle's own J dJ. psi = 0 is plain MLS-MPM.
+// forward by this step's volume change) with the particle's own J. psi = 0 is plain MLS-MPM. In strains:
+// J_new - 1 = (1 + a)(1 + de) - 1 = a + de + a de, with a = psi e_grid + (1 - psi) e_particle.
 template <typename T>
-FLUME_HD T jbar_update(T J_particle, T J_grid_average, T dJ, T psi) {
-  return (psi * J_grid_average + (T(1) - psi) * J_particle) * dJ;
+FLUME_HD T jbar_update(T e_particle, T e_grid_average, T de, T psi) {
+  const T a = psi * e_grid_average + (T(1) - psi) * e_particle;
+  return a + de + a * de;
+}
+
+// Well-balanced J-bar. The grid average of eq. 3 is exact for a constant strain but not for the linear one of
+// water at rest: next to a floor or a free surface the stencil sees particles on one side only, the average
+// is taken off-centre, and every step would pull the strain there away from hydrostatic balance (a column
+// at psi = 0.9 loses 3% of its bottom pressure in 1.5 s and never settles). So the averaged quantity is the
+// strain minus its hydrostatic part e_h(x) = s . x, s = -rho g / K, and e_h is added back at the particle:
+// at rest the averaged field is constant and the average leaves it untouched. This is the hydrostatic
+// correction the delta-SPH density diffusion applies for the same reason (Antuono et al. 2012; the study's
+// eq. 21, rho^H). Away from rest it changes nothing but which linear field the smoothing preserves.
+template <int D, typename T>
+FLUME_HD T hydrostatic_strain(const T* x, const T* slope) {
+  T e = 0;
+  for (int a = 0; a < D; ++a) e += slope[a] * x[a];
+  return e;
 }
 
 // Boundary projection of a grid-node velocity (paper eq. 2). n is the outward normal of the solid (into

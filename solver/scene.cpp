@@ -80,6 +80,15 @@ class Reader {
       fail(key, "must be in [" + std::to_string(lo) + ", " + std::to_string(hi) + "] (got " + fmt(x) + ")");
     return static_cast<int>(x);
   }
+  bool boolean(const std::string& key, std::optional<bool> def) {
+    if (!has(key)) {
+      if (!def) fail(key, "is required (true or false)");
+      return *def;
+    }
+    const json& v = raw(key);
+    if (!v.is_boolean()) fail(key, std::string("must be true or false, got ") + type_name(v));
+    return v.get<bool>();
+  }
   std::string string(const std::string& key, std::optional<std::string> def) {
     if (!has(key)) {
       if (!def) fail(key, "is required (a string)");
@@ -340,6 +349,10 @@ Scene parse(const json& root_json, const std::string& file) {
                      " allows [" + fmt(lo_ok) + ", " + fmt(hi_ok) + "], got [" + fmt(w.lo[d]) + ", " + fmt(w.hi[d]) +
                      "]");
       }
+      // Initial pressure: hydrostatic below a free surface (default: the region's top), so that water at rest
+      // starts in equilibrium instead of falling onto its own compression and ringing acoustically.
+      w.hydrostatic = r.boolean("hydrostatic", true);
+      w.surface = r.number("surface", w.hi[dim - 1], w.lo[dim - 1], 1e6);
       // Water placed inside a solid would be expelled violently at t = 0: forbidden.
       for (const auto& b : sc.boundaries)
         if (solid_overlaps_box(b.shape, w.lo, w.hi, dim, 0.25 * sc.solver.dx))

@@ -30,9 +30,12 @@ struct Boundary {
   Vec3d velocity{};       // boundary velocity v_b of eq. 2
 };
 
-// Water initially at rest, filling a box.
+// Water initially at rest, filling a box. With `hydrostatic`, it starts with the pressure rho g (surface - z)
+// (zero above `surface`), `surface` defaulting to the box's top.
 struct WaterRegion {
   Vec3d lo{}, hi{};
+  bool hydrostatic = true;
+  double surface = 0.0;
 };
 
 struct SolverSettings {
