@@ -165,16 +165,17 @@ class MpmSolver final : public Simulation {
         v[d] = v_[d][i];
       }
       for (int d = 0; d < 3; ++d) L[d] += mp_ * v[d];
-      // Particle angular momentum: x cross m v plus the APIC spin term m * (dx^2/4) * axial(C - C^T) / ...
-      // (Jiang et al. 2015, eq. 26: L_p = x_p x m v_p + m (D_p B_p^T : epsilon)); for quadratic splines
-      // B_p = C_p D_p with D_p = dx^2/4 I, so the spin part is m dx^2/4 * (C^T - C) axial.
+      // Particle angular momentum: x_p x m v_p plus the APIC spin m sum_i w_ip (x_i - x_p) x v_i (Jiang et al.
+      // 2015, section 5.3). With B_p = C_p D_p, D_p = dx^2/4 I for quadratic splines, the spin is
+      // m dx^2/4 (C_ab - C_ba) over the cyclic (a, b) of each axis, C_ab = dv_a/dx_b: for a rigid rotation
+      // C = [omega]x it is m dx^2/2 omega, turning the same way as the blob.
       const double s = mp_ * dx_ * dx_ / 4.0;
       if constexpr (D == 3) {
-        A[0] += mp_ * (x[1] * v[2] - x[2] * v[1]) + s * (C_[5][i] - C_[7][i]);
-        A[1] += mp_ * (x[2] * v[0] - x[0] * v[2]) + s * (C_[6][i] - C_[2][i]);
-        A[2] += mp_ * (x[0] * v[1] - x[1] * v[0]) + s * (C_[1][i] - C_[3][i]);
+        A[0] += mp_ * (x[1] * v[2] - x[2] * v[1]) + s * (C_[7][i] - C_[5][i]);
+        A[1] += mp_ * (x[2] * v[0] - x[0] * v[2]) + s * (C_[2][i] - C_[6][i]);
+        A[2] += mp_ * (x[0] * v[1] - x[1] * v[0]) + s * (C_[3][i] - C_[1][i]);
       } else {
-        A[2] += mp_ * (x[0] * v[1] - x[1] * v[0]) + s * (C_[1][i] - C_[2][i]);
+        A[2] += mp_ * (x[0] * v[1] - x[1] * v[0]) + s * (C_[2][i] - C_[1][i]);
       }
     }
     for (int d = 0; d < 3; ++d) {
