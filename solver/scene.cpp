@@ -47,9 +47,15 @@ class Reader {
     if (key.empty()) return path_;
     return path_.empty() ? key : path_ + "." + key;
   }
-  bool has(const std::string& key) const { return j_.contains(key); }
+  // Every accessor asks has() first, so `known_` collects every field this object may hold, present or not:
+  // finish() lists them all, so a typo's message shows the intended name even when it was left out.
+  bool has(const std::string& key) const {
+    known_.insert(key);
+    return j_.contains(key);
+  }
   const json& raw(const std::string& key) {
     used_.insert(key);
+    known_.insert(key);
     return j_.at(key);
   }
 
@@ -146,7 +152,7 @@ class Reader {
     for (auto it = j_.begin(); it != j_.end(); ++it) {
       if (used_.count(it.key())) continue;
       std::string allowed;
-      for (const auto& k : used_) allowed += (allowed.empty() ? "" : ", ") + k;
+      for (const auto& k : known_) allowed += (allowed.empty() ? "" : ", ") + k;
       fail(it.key(), "unknown field" + (allowed.empty() ? std::string() : " (known here: " + allowed + ")"));
     }
   }
@@ -154,7 +160,10 @@ class Reader {
   const std::string& file() const { return file_; }
 
   // Marks keys as known without reading them (for fields read by a later pass).
-  void accept(const std::string& key) { used_.insert(key); }
+  void accept(const std::string& key) {
+    used_.insert(key);
+    known_.insert(key);
+  }
 
  private:
   static std::string range(double lo, double hi, bool lo_open, bool hi_open) {
@@ -165,6 +174,7 @@ class Reader {
   std::string path_;
   const std::string& file_;
   std::set<std::string> used_;
+  mutable std::set<std::string> known_;
 };
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
