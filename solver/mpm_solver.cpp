@@ -791,10 +791,23 @@ class MpmSolver final : public Simulation {
     }
     const double e = ke + pe + el;
     if (e > energy0_ + energy_slack_) {
+      // Where: the fastest particle, found serially (this runs once, when the run stops).
+      size_t fastest = 0;
+      double best = -1;
+      for (size_t i = 0; i < n_; ++i) {
+        double v2 = 0;
+        for (int d = 0; d < D; ++d) v2 += double(v_[d][i]) * v_[d][i];
+        if (v2 > best) {
+          best = v2;
+          fastest = i;
+        }
+      }
+      double xf[D];
+      for (int d = 0; d < D; ++d) xf[d] = x_[d][fastest];
       std::ostringstream s;
       s << "energy grew beyond what gravity and forcing supply at t = " << t_new << " s (step " << steps_ + 1
         << "): total " << e << " J against " << energy0_ << " J initially (max speed " << std::sqrt(vmax2)
-        << " m/s); try a smaller solver.cfl";
+        << " m/s, particle " << fastest << " at " << fmt_point(xf, D) << "); try a smaller solver.cfl";
       fail(s.str());
     }
     last_energy_ = {ke, pe, el};
