@@ -249,6 +249,7 @@ class MpmSolver final : public Simulation {
     v0_ = std::pow(spacing_, D);
     mp_ = scene_.fluid.density * v0_;
     std::vector<double> pos[D], strain;
+    std::vector<T> held;
     for (size_t w = 0; w < scene_.water.size(); ++w) {
       const auto& box = scene_.water[w];
       long count[D];
@@ -281,6 +282,12 @@ class MpmSolver final : public Simulation {
           e = std::expm1(-std::log1p(g * pressure / scene_.fluid.bulk_modulus) / g);
         }
         strain.push_back(e);
+        // The reservoir's water above still-water level is what the vacuum holds (issue 3).
+        const auto& B = scene_.basin;
+        held.push_back(B.present && B.forcing.model != ForcingModel::kNone && p[0] < B.reservoir_length_m &&
+                               p[D - 1] > B.still_water_m
+                           ? T(1)
+                           : T(0));
       }
     }
     n_ = pos[0].size();
@@ -290,6 +297,7 @@ class MpmSolver final : public Simulation {
     }
     for (int k = 0; k < D * D; ++k) C_[k].assign(n_, T(0));
     e_.assign(strain.begin(), strain.end());
+    if (std::any_of(held.begin(), held.end(), [](T h) { return h > T(0); })) held_.swap(held);
     mass_ = mp_ * n_;
   }
 
@@ -343,6 +351,7 @@ class MpmSolver final : public Simulation {
       }
       for (int k = 0; k < D * D; ++k) permute(C_[k]);
       permute(e_);
+      if (!held_.empty()) permute(held_);
       std::vector<uint64_t> sorted(n_);
       for (size_t i = 0; i < n_; ++i) sorted[i] = key[order[i]];
       key.swap(sorted);
@@ -448,13 +457,35 @@ class MpmSolver final : public Simulation {
   // usually sit on grid lines; computed in float, the node on the wall would fall on either side of it by
   // round-off and the wall would leak or grip at random (a float column lost 70% of its corner pressure
   // in five steps that way).
-  bool node_in_wall(const Wall& w, const int* node, T* n) const {
+  //
+  // A node inside a box is held by every face within two cells of it, not only by the nearest: near the
+  // quay's top edge the nearest face is the top, and a node constrained by it alone would let the basin's
+  // water flow sideways into the wall. Inside a thin wall, such as the gate panel, both faces hold it.
+  // Returns the number of normals written to n.
+  int node_in_wall(const Wall& w, const int* node, T (*n)[D]) const {
     double x[D], nd[D];
     for (int d = 0; d < D; ++d) x[d] = grid_lo_[d] + node[d] * dx_;
-    const double dist =
-        w.box ? mpm::box_distance<D>(x, w.ad, w.bd, nd) : mpm::half_space_distance<D>(x, w.ad, w.bd, nd);
-    for (int d = 0; d < D; ++d) n[d] = T(nd[d]);
-    return dist <= 1e-6 * dx_;
+    const double tol = 1e-6 * dx_;
+    if (!w.box) {
+      const double dist = mpm::half_space_distance<D>(x, w.ad, w.bd, nd);
+      for (int d = 0; d < D; ++d) n[0][d] = T(nd[d]);
+      return dist <= tol ? 1 : 0;
+    }
+    const double dist = mpm::box_distance<D>(x, w.ad, w.bd, nd);
+    if (dist > tol) return 0;
+    int count = 0;
+    for (int a = 0; a < D; ++a)
+      for (int side = 0; side < 2; ++side) {
+        const double depth = side == 0 ? x[a] - w.ad[a] : w.bd[a] - x[a];  // distance in from this face
+        if (depth > 2 * dx_) continue;
+        for (int d = 0; d < D; ++d) n[count][d] = T(d == a ? (side == 0 ? -1 : 1) : 0);
+        ++count;
+      }
+    if (count == 0) {  // deep inside: the nearest face
+      for (int d = 0; d < D; ++d) n[0][d] = T(nd[d]);
+      count = 1;
+    }
+    return count;
   }
 
   static int tile_index(const int* a) {
@@ -469,6 +500,7 @@ class MpmSolver final : public Simulation {
     const T dx = T(dx_);
     const T m = T(mp_);
     const T stress_scale = -dt * T(v0_) * T(4) * inv_dx_ * inv_dx_;
+    const T lift = T(double(dt) * mp_ * scene_.basin.forcing.hold(time_) * std::fabs(scene_.solver.gravity[D - 1]));
     const long nblocks = static_cast<long>(pkeys_.size());
 #pragma omp parallel for schedule(dynamic, 4)
     for (long p = 0; p < nblocks; ++p) {
@@ -498,6 +530,8 @@ class MpmSolver final : public Simulation {
           for (int b = 0; b < D; ++b) s -= A[a * D + b] * f[b] * dx;
           mom0[a] = s;
         }
+        // The vacuum's hold: an upward force f(t) m |g| on the held water.
+        if (!held_.empty()) mom0[D - 1] += held_[i] * lift;
         T xp[D];
         for (int d = 0; d < D; ++d) xp[d] = x_[d][i];
         const T mJ = m * (e - mpm::hydrostatic_strain<D>(xp, strain_slope_));
@@ -604,12 +638,13 @@ class MpmSolver final : public Simulation {
           // Scene boundaries reaching this block.
           for (uint32_t q = g_bnd_start_[g]; q < g_bnd_start_[g + 1]; ++q) {
             const Wall& w = walls_[g_bnd_[q]];
-            T n[D];
-            if (!node_in_wall(w, node, n)) continue;
+            T n[2 * D][D];
+            const int faces = node_in_wall(w, node, n);
+            if (!faces) continue;
             on_wall = 1;
             T before[D];
             for (int d = 0; d < D; ++d) before[d] = v[d];
-            mpm::project_velocity<D>(v, n, w.vb, w.bc, w.mu);
+            for (int f = 0; f < faces; ++f) mpm::project_velocity<D>(v, n[f], w.vb, w.bc, w.mu);
             for (int d = 0; d < D; ++d) my_impulse[g_bnd_[q] * D + d] += double(m) * (before[d] - v[d]);
           }
           // The domain box is a container: nodes on or beyond its faces are walls.
@@ -834,6 +869,7 @@ class MpmSolver final : public Simulation {
   double c_ = 0;
   double spacing_ = 0, v0_ = 0, mp_ = 0, mass_ = 0;
   size_t n_ = 0;
+  std::vector<T> held_;  // 1 for water the reservoir's vacuum holds (empty when nothing is held)
   std::vector<T> x_[D], v_[D], C_[D * D], e_;  // e: volumetric strain J - 1
   std::vector<uint64_t> pkeys_, gkeys_;
   std::vector<uint32_t> pstart_;

@@ -22,6 +22,14 @@ std::map<std::string, double> compute_metrics(const Scene& scene, const Record& 
   std::map<std::string, double> m;
   for (const auto& [name, ts] : record.gauges) {
     double peak = -1e300, peak_t = 0, arrival = -1;
+    // Arrival: the first rise of the threshold above the gauge's first reading (0 where it starts in still
+    // water; the ground's height above the datum where it starts dry, as on an apron).
+    double start = 0;
+    for (size_t i = 0; i < ts.size(); ++i)
+      if (std::isfinite(ts.at(i))) {
+        start = ts.at(i);
+        break;
+      }
     for (size_t i = 0; i < ts.size(); ++i) {
       const double e = ts.at(i);
       if (!std::isfinite(e)) continue;
@@ -29,7 +37,7 @@ std::map<std::string, double> compute_metrics(const Scene& scene, const Record& 
         peak = e;
         peak_t = ts.time[i];
       }
-      if (arrival < 0 && e >= arrival_threshold_m) arrival = ts.time[i];
+      if (arrival < 0 && e >= start + arrival_threshold_m) arrival = ts.time[i];
     }
     if (peak > -1e300) {
       m[name + ".peak_m"] = peak;

@@ -1,6 +1,8 @@
 // Scene JSON -> plain structs, with every value checked once here.
 #include "solver/scene.h"
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <fstream>
 #include <limits>
@@ -262,6 +264,202 @@ bool solid_overlaps_box(const Shape& s, const Vec3d& lo, const Vec3d& hi, int di
   return m < -tol;
 }
 
+// ---- tsunami basin -----------------------------------------------------------------------------------------
+// A `basin` section generates the domain, walls, gate, quay, obstacles, water and the standard instruments
+// of a reservoir-driven tsunami basin (defaults: the Waseda basin of Goseberg et al. 2016b as the study's
+// Tables 1-2 give it). Geometry is defined once in the 3D frame (x downstream from the reservoir's back wall,
+// y across, z up) and mapped to the scene's frame: a 2D scene is the x-z slice at basin.slice_y_m, a `half`
+// span keeps y <= width/2 with a symmetry (slip) plane on the centreline.
+
+Basin read_basin(const json& root, const std::string& file, int dim) {
+  static const json empty = json::object();
+  Basin B;
+  B.present = true;
+  Reader b(root.at("basin"), "basin", file);
+  B.span = b.choice<std::string>("span", std::string(dim == 2 ? "slice" : "full"),
+                                 {{"full", "full"}, {"half", "half"}, {"slice", "slice"}});
+  if ((B.span == "slice") != (dim == 2))
+    b.fail("span", dim == 2 ? "must be slice in a 2D scene" : "must be full or half in a 3D scene (slice is 2D)");
+  B.still_water_m = b.number("still_water_m", 0.23, 0.0, 10.0, true, false);
+  B.quay_x_m = b.number("quay_x_m", 4.45, 0.5, 1000.0);
+  B.apron_height_m = b.number("apron_height_m", 0.255, 0.0, 10.0);
+  B.length_m = b.number("length_m", 9.0, B.quay_x_m, 1000.0, true, false);
+  B.width_m = b.number("width_m", 4.0, 0.0, 1000.0, true, false);
+  B.slice_y_m = b.number("slice_y_m", B.width_m / 2, 0.0, B.width_m);
+  b.choice<std::string>("walls", std::string("slip"), {{"sticky", "sticky"}, {"slip", "slip"}, {"separate", "separate"}});
+  b.number("wall_friction", 0.0, 0.0, 10.0);
+  b.choice<std::string>("instruments", std::string("waseda"), {{"waseda", "waseda"}, {"none", "none"}});
+  b.finish();
+
+  Reader r(root.contains("reservoir") ? root.at("reservoir") : empty, "reservoir", file);
+  B.reservoir_length_m = r.number("length_m", 0.50, 0.0, B.quay_x_m, true, true);
+  B.gate_thickness_m = r.number("gate_thickness_m", 0.04, 0.0, 1.0, true, false);
+  B.fill_level_m = r.number("fill_level_m", 0.90, B.still_water_m, 100.0);
+  B.gate_height_m = r.number("gate_height_m", 0.10, 0.0, B.fill_level_m, true, false);
+  if (B.reservoir_length_m + B.gate_thickness_m >= B.quay_x_m)
+    r.fail("length_m", "the reservoir and gate must end before the quay at x = " + fmt(B.quay_x_m));
+  {
+    Reader f = r.object("forcing");
+    auto& F = B.forcing;
+    F.model = f.choice<ForcingModel>("model", ForcingModel::kNone,
+                                     {{"none", ForcingModel::kNone},
+                                      {"exponential", ForcingModel::kExponential},
+                                      {"table", ForcingModel::kTable}});
+    F.t99_s = f.number("t99_s", 1.0, 0.0, 1000.0);
+    if (f.has("table")) {
+      const json& t = f.raw("table");
+      auto bad = [&](const std::string& at, const std::string& what) { f.fail("table" + at, what); };
+      if (!t.is_array() || t.size() < 2) bad("", "must be an array of at least 2 points [t_s, f]");
+      for (size_t i = 0; i < t.size(); ++i) {
+        const json& pt = t[i];
+        const std::string at = "." + std::to_string(i);
+        if (!pt.is_array() || pt.size() != 2 || !pt[0].is_number() || !pt[1].is_number())
+          bad(at, "must be a point [t_s, f] of two numbers");
+        const double ti = pt[0].get<double>(), fi = pt[1].get<double>();
+        if (!(ti >= 0) || !std::isfinite(ti)) bad(at + ".0", "time must be a finite number >= 0 (got " + fmt(ti) + ")");
+        if (!(fi >= 0 && fi <= 1)) bad(at + ".1", "hold fraction must be in [0, 1] (got " + fmt(fi) + ")");
+        if (i > 0 && !(ti > F.table.back()[0]))
+          bad(at + ".0", "times must increase (got " + fmt(ti) + " after " + fmt(F.table.back()[0]) + ")");
+        F.table.push_back({ti, fi});
+      }
+    } else if (F.model == ForcingModel::kTable) {
+      f.fail("table", "is required by model table (an array of points [t_s, f])");
+    }
+    f.finish();
+  }
+  r.finish();
+
+  Reader o(root.contains("obstacles") ? root.at("obstacles") : empty, "obstacles", file);
+  B.obstacles_layout = o.choice<std::string>("layout", std::string("0x0"), {{"0x0", "0x0"}, {"5x1", "5x1"}, {"5x2", "5x2"}});
+  o.number("size_m", 0.10, 0.0, 10.0, true, false);
+  o.number("spacing_m", 0.325, 0.0, 100.0, true, false);
+  o.number("row_spacing_m", 0.45, 0.0, 100.0, true, false);
+  o.number("first_row_x_m", 5.11, B.quay_x_m, B.length_m);
+  o.finish();
+  return B;
+}
+
+// Writes the basin's domain, boundaries, water and instruments into the scene's JSON (which must not set
+// them itself), so that the strict parse below validates them like any hand-written scene.
+void expand_basin(json& root, Basin& B, const std::string& file, int dim) {
+  for (const char* k : {"domain", "water"})
+    if (root.contains(k))
+      throw InputError(file, k, "is generated by the basin section: remove it, or remove `basin` and describe the scene by hand");
+  const json& bs = root.at("basin");
+  const json& os = root.contains("obstacles") ? root.at("obstacles") : json::object();
+  double dx = 0.02;
+  if (root.contains("solver") && root["solver"].is_object() && root["solver"].contains("dx") && root["solver"]["dx"].is_number())
+    dx = root["solver"]["dx"].get<double>();
+  const std::string walls = bs.value("walls", std::string("slip"));
+  const double wall_friction = bs.value("wall_friction", 0.0);
+  const bool half = B.span == "half";
+  const double W = half ? B.width_m / 2 : B.width_m;  // modelled width
+  const double pad = 3 * dx;
+  const double top = std::max(B.fill_level_m, B.apron_height_m + 0.3) + 0.1;
+  const double L = B.length_m, Lr = B.reservoir_length_m, Lg = Lr + B.gate_thickness_m;
+
+  auto at = [&](double x, double y, double z) {
+    return dim == 2 ? json::array({x, z}) : json::array({x, y, z});
+  };
+  auto box = [&](const std::string& name, double x0, double x1, double y0, double y1, double z0, double z1) {
+    return json{{"name", name}, {"type", "box"}, {"lo", at(x0, y0, z0)}, {"hi", at(x1, y1, z1)},
+                {"condition", walls}, {"friction", wall_friction}};
+  };
+  auto plane = [&](const std::string& name, json point, json normal) {
+    return json{{"name", name}, {"type", "half_space"}, {"point", point}, {"normal", normal},
+                {"condition", walls}, {"friction", wall_friction}};
+  };
+  root["domain"] = {{"lo", at(-pad, -pad, -pad)}, {"hi", at(L + pad, W + pad, top + pad)}, {"walls", "slip"}};
+  json bnd = json::array();
+  bnd.push_back(plane("back_wall", at(0, 0, 0), at(1, 0, 0)));
+  bnd.push_back(plane("floor", at(0, 0, 0), at(0, 0, 1)));
+  bnd.push_back(plane("end_wall", at(L, 0, 0), at(-1, 0, 0)));
+  if (dim == 3) {
+    bnd.push_back(plane("side_wall", at(0, 0, 0), at(0, 1, 0)));
+    if (half) {
+      json sym = plane("symmetry", at(0, W, 0), at(0, -1, 0));
+      sym["condition"] = "slip";  // a mirror plane: no flow across, free along
+      sym["friction"] = 0.0;
+      bnd.push_back(sym);
+    } else {
+      bnd.push_back(plane("far_side_wall", at(0, W, 0), at(0, -1, 0)));
+    }
+  }
+  bnd.push_back(box("gate", Lr, Lg, -pad, W + pad, B.gate_height_m, top + 2 * pad));
+  bnd.push_back(box("quay", B.quay_x_m, L + 2 * pad, -pad, W + pad, -2 * pad, B.apron_height_m));
+  // Obstacles: 0.10 m square columns, 5 across centred on the basin, rows 0.45 m apart.
+  const int rows = B.obstacles_layout == "5x2" ? 2 : B.obstacles_layout == "5x1" ? 1 : 0;
+  const double size = os.value("size_m", 0.10), spacing = os.value("spacing_m", 0.325);
+  const double row_spacing = os.value("row_spacing_m", 0.45), x0 = os.value("first_row_x_m", 5.11);
+  json loads = json::array();
+  for (int rr = 0; rr < rows; ++rr)
+    for (int c = 0; c < 5; ++c) {
+      const double xl = x0 + rr * row_spacing;
+      const double yl = B.width_m / 2 - size / 2 + (c - 2) * spacing;
+      double yh = yl + size;
+      if (dim == 2 && !(yl <= B.slice_y_m && B.slice_y_m <= yh)) continue;  // not cut by the slice
+      if (half && yl >= W) continue;                                       // in the mirrored half
+      if (half && yh > W) yh = W + pad;                                     // cut by the symmetry plane
+      const std::string name = "column_r" + std::to_string(rr + 1) + "c" + std::to_string(c + 1);
+      bnd.push_back(box(name, xl, xl + size, yl, yh, B.apron_height_m - 2 * pad, top + 2 * pad));
+      B.obstacle_names.push_back(name);
+      loads.push_back({{"name", "LC_r" + std::to_string(rr + 1) + "c" + std::to_string(c + 1)},
+                       {"boundary", name}, {"rate_hz", 1200}});
+    }
+  if (!root.contains("boundaries")) root["boundaries"] = json::array();
+  for (auto& b : bnd) root["boundaries"].push_back(b);
+
+  // Water: the reservoir (its part above still water is what the vacuum holds), the gap under the gate, the
+  // basin up to the quay. Released (`none`), the reservoir starts hydrostatic to its own surface; held, to
+  // still-water level, the held layer above weighing nothing.
+  const double still = B.still_water_m;
+  const double res_surface = B.forcing.model == ForcingModel::kNone ? B.fill_level_m : still;
+  root["water"] = json::array();
+  root["water"].push_back({{"lo", at(0, 0, 0)}, {"hi", at(Lr, W, B.fill_level_m)}, {"surface", res_surface}});
+  root["water"].push_back({{"lo", at(Lr, 0, 0)}, {"hi", at(Lg, W, std::min(B.gate_height_m, still))}, {"surface", still}});
+  root["water"].push_back({{"lo", at(Lg, 0, 0)}, {"hi", at(B.quay_x_m, W, still)}, {"surface", still}});
+
+  // Instruments of the study's Table 1 in this frame: gauges report eta above still water.
+  if (bs.value("instruments", std::string("waseda")) == "waseda") {
+    json& inst = root["instruments"];
+    if (inst.is_null()) inst = json::object();
+    auto across = [&](double y) { return std::clamp(y, 0.5 * dx, W - 0.5 * dx); };
+    auto horizontal = [&](double x, double y) { return dim == 2 ? json::array({x}) : json::array({x, across(y)}); };
+    json gauges = json::array();
+    const double wall_offset = 0.25;
+    const std::array<std::pair<const char*, std::array<double, 2>>, 4> wg = {{{"WG1", {1.85, B.width_m / 2}},
+                                                                                {"WG2", {3.64, wall_offset}},
+                                                                                {"WG3", {4.69, wall_offset}},
+                                                                                {"WG4", {6.15, wall_offset}}}};
+    for (const auto& [name, p] : wg)
+      gauges.push_back({{"name", name}, {"position", horizontal(p[0], p[1])}, {"rate_hz", 100}, {"datum_m", still}});
+    json probes = json::array({{{"name", "ADV"}, {"position", at(3.64, across(0.35), still - 0.10)}, {"rate_hz", 100}}});
+    for (const char* k : {"gauges", "probes", "loads"})
+      if (!inst.contains(k)) inst[k] = json::array();
+    for (auto& g : gauges) inst["gauges"].push_back(g);
+    for (auto& p : probes) inst["probes"].push_back(p);
+    for (auto& l : loads) inst["loads"].push_back(l);
+  }
+  root.erase("basin");
+  root.erase("reservoir");
+  root.erase("obstacles");
+}
+
+double ReservoirForcing_hold(const ReservoirForcing& F, double t) {
+  switch (F.model) {
+    case ForcingModel::kNone: return 0.0;
+    case ForcingModel::kExponential: return F.t99_s > 0 ? std::exp(-t * std::log(100.0) / F.t99_s) : 0.0;
+    case ForcingModel::kTable: {
+      const auto& T = F.table;
+      if (t <= T.front()[0]) return T.front()[1];
+      for (size_t i = 1; i < T.size(); ++i)
+        if (t <= T[i][0]) return T[i - 1][1] + (T[i][1] - T[i - 1][1]) * (t - T[i - 1][0]) / (T[i][0] - T[i - 1][0]);
+      return T.back()[1];
+    }
+  }
+  return 0.0;
+}
+
 Scene parse(const json& root_json, const std::string& file) {
   Scene sc;
   sc.file = file;
@@ -444,6 +642,17 @@ Scene parse_scene_text(const std::string& json_text, const std::string& file_lab
     throw InputError(file_label, "", std::string("not valid JSON: ") + e.what());
   }
   for (const auto& o : overrides) apply_override(root, o, file_label + " (--set " + o.path + ")");
+  if (root.is_object() && root.contains("basin")) {
+    if (!root.contains("dimension") || !root["dimension"].is_number_integer())
+      throw InputError(file_label, "dimension", "is required (2 or 3)");
+    const int dim = root["dimension"].get<int>();
+    if (dim != 2 && dim != 3) throw InputError(file_label, "dimension", "must be 2 or 3");
+    Basin basin = read_basin(root, file_label, dim);
+    expand_basin(root, basin, file_label, dim);
+    Scene sc = parse(root, file_label);
+    sc.basin = basin;
+    return sc;
+  }
   return parse(root, file_label);
 }
 
@@ -463,5 +672,13 @@ const char* to_string(BoundaryCondition c) {
   }
 }
 const char* to_string(Precision p) { return p == Precision::kFloat ? "float" : "double"; }
+const char* to_string(ForcingModel m) {
+  switch (m) {
+    case ForcingModel::kExponential: return "exponential";
+    case ForcingModel::kTable: return "table";
+    default: return "none";
+  }
+}
+double ReservoirForcing::hold(double t) const { return ReservoirForcing_hold(*this, t); }
 
 }  // namespace flume

@@ -81,6 +81,29 @@ struct Instruments {
   double snapshot_rate_hz = 0;  // 0: no particle snapshots
 };
 
+// The vacuum hold of a tsunami basin's reservoir (issue 3): the fraction f(t) of the weight of the water
+// above still-water level that the vacuum carries. f = 1 holds it, f = 0 releases it.
+enum class ForcingModel { kNone, kExponential, kTable };
+struct ReservoirForcing {
+  ForcingModel model = ForcingModel::kNone;
+  double t99_s = 1.0;                               // exponential: f = exp(-t ln(100) / t99)
+  std::vector<std::array<double, 2>> table;         // table: control points (t s, f), piecewise linear
+  double hold(double t) const;                      // f(t) in [0, 1]
+};
+
+// A tsunami wave basin generated from a few parameters (the `basin`, `reservoir` and `obstacles` sections
+// of a scene; see scenes/waseda/README.md). Kept on the scene for the forcing, the metrics and the reports.
+struct Basin {
+  bool present = false;
+  std::string span = "full";       // full | half | slice (2D)
+  double length_m = 9.0, width_m = 4.0, still_water_m = 0.23, quay_x_m = 4.45, apron_height_m = 0.255;
+  double slice_y_m = 2.0;          // the slice's position across (2D)
+  double reservoir_length_m = 0.50, gate_thickness_m = 0.04, gate_height_m = 0.10, fill_level_m = 0.90;
+  ReservoirForcing forcing;
+  std::string obstacles_layout = "0x0";
+  std::vector<std::string> obstacle_names;  // boundaries that are obstacles (columns)
+};
+
 struct Scene {
   std::string file;  // where it was read from, for messages
   std::string name;
@@ -93,6 +116,7 @@ struct Scene {
   std::vector<WaterRegion> water;
   std::vector<Boundary> boundaries;
   Instruments instruments;
+  Basin basin;
 };
 
 // A `--set path=value` override. The value is read as JSON where it parses as JSON, else as a string.
@@ -112,5 +136,6 @@ Scene parse_scene_text(const std::string& json_text, const std::string& file_lab
 
 const char* to_string(BoundaryCondition c);
 const char* to_string(Precision p);
+const char* to_string(ForcingModel m);
 
 }  // namespace flume
