@@ -1,0 +1,99 @@
+#!/usr/bin/env bash
+# CUDA backend: the GPU tests and the speed of the 3D dam break of about one million particles (issue 2,
+# item 8), in float and double, as particle-steps per second.
+#
+# The GPU machine (tool `device`, H100) has nvcc and CMake but not this project's libraries (HDF5, Eigen,
+# nlohmann-json, GTest, OpenTURNS, ...), and `flume` with its libraries is far over the 64 MiB that can be
+# carried there. So the tests' program test_cuda (flume_solver and GTest only; it holds the benchmark too,
+# timed as `flume bench` times) is built here and carried with its few shared libraries:
+#
+#   here:   cmake -S . -B build-cuda -DCMAKE_BUILD_TYPE=Release && cmake --build build-cuda -j2 --target test_cuda
+#           bench/run_gpu_bench.sh bundle [BUILD_DIR]      # copies test_cuda and its libraries into .gpu/
+#   device: run(command="bench/run_gpu_bench.sh", carry=[".gpu"])                  # tests, then the benchmark
+#           run(command="STEPS=400 bench/run_gpu_bench.sh bench-only", carry=[".gpu"])
+#
+# Where a full build sits next to a GPU, FLUME=build-cuda/bin/flume adds `flume bench --backend cuda` figures:
+#   FLUME=build-cuda/bin/flume TEST_CUDA=build-cuda/bin/test_cuda bench/run_gpu_bench.sh
+set -euo pipefail
+root=$(cd "$(dirname "$0")/.." && pwd)
+cd "$root"
+mode=${1:-all}
+tests_failed=0
+
+if [[ $mode == bundle ]]; then
+  build=${2:-$root/build-cuda}
+  rm -rf .gpu
+  mkdir -p .gpu/bin .gpu/lib
+  exclude=$(git rev-parse --git-path info/exclude)
+  mkdir -p "$(dirname "$exclude")"
+  grep -qx '/.gpu/' "$exclude" 2>/dev/null || echo '/.gpu/' >>"$exclude"
+  cp "$build/bin/test_cuda" .gpu/bin/
+  # Every shared library but the C library's own (the device's glibc is newer, and binaries built against an
+  # older one run on it) and the CUDA driver (the device's own must be used).
+  for exe in .gpu/bin/*; do
+    ldd "$exe" | awk '/=> \// {print $3}'
+  done | sort -u | grep -vE '/(libc|libm|libdl|libpthread|librt|libresolv|ld-linux[^/]*|libcuda)\.so' |
+    while read -r lib; do cp -L "$lib" .gpu/lib/; done
+  du -sh .gpu
+  echo "bundled into $root/.gpu: carry it with run(..., carry=[\".gpu\"]) (64 MiB at most)"
+  exit 0
+fi
+
+if [[ -d .gpu/lib ]]; then
+  export LD_LIBRARY_PATH=$root/.gpu/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}
+fi
+flume=${FLUME:-}
+test_cuda=${TEST_CUDA:-$root/.gpu/bin/test_cuda}
+steps=${STEPS:-200}
+[[ -x $test_cuda ]] || { echo "run_gpu_bench.sh: no test_cuda at $test_cuda (bundle first, or set TEST_CUDA)" >&2; exit 2; }
+nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv,noheader || true
+echo "# $(date -u +%Y-%m-%dT%H:%MZ), $(nproc) cores, $(git describe --always --dirty 2>/dev/null || echo unknown)"
+
+if [[ $mode == all ]]; then
+  # The tests read the scenes from this checkout and call this flume.
+  FLUME_EXE=${flume:-/nonexistent} FLUME_SOURCE_DIR=$root "$test_cuda" --gtest_color=no --gtest_filter=-CudaBench.* ||
+    tests_failed=1
+fi
+
+# The benchmark scene: bench/scenes/dam_break_3d_1m.json when present (the CPU benchmark's), else the same
+# dam break written here: a 1.0 x 0.5 x 0.5 m block at dx = 12.5 mm, 8 particles per cell = 1,024,000 particles.
+scene=$root/bench/scenes/dam_break_3d_1m.json
+if [[ ! -f $scene ]]; then
+  scene=$(mktemp --suffix=.json)
+  cat >"$scene" <<'EOF'
+{
+  "name": "dam_break_3d_1m",
+  "dimension": 3,
+  "domain": {"lo": [-0.05, -0.05, -0.05], "hi": [3.25, 0.55, 1.0], "walls": "slip"},
+  "solver": {"dx": 0.0125, "ppc": 8, "cfl": 0.4, "precision": "float", "end_time": 2.0},
+  "fluid": {"density": 1000, "bulk_modulus": 2.0e6, "gamma": 7.0, "viscosity": 1.0e-3, "jbar_psi": 0.9},
+  "water": [{"lo": [0.0, 0.0, 0.0], "hi": [1.0, 0.5, 0.5]}],
+  "boundaries": [
+    {"name": "back_wall", "type": "half_space", "point": [0.0, 0.0, 0.0], "normal": [1.0, 0.0, 0.0], "condition": "slip"},
+    {"name": "end_wall", "type": "half_space", "point": [3.2, 0.0, 0.0], "normal": [-1.0, 0.0, 0.0], "condition": "slip"},
+    {"name": "side_left", "type": "half_space", "point": [0.0, 0.0, 0.0], "normal": [0.0, 1.0, 0.0], "condition": "slip"},
+    {"name": "side_right", "type": "half_space", "point": [0.0, 0.5, 0.0], "normal": [0.0, -1.0, 0.0], "condition": "slip"},
+    {"name": "floor", "type": "half_space", "point": [0.0, 0.0, 0.0], "normal": [0.0, 0.0, 1.0], "condition": "slip"}
+  ],
+  "instruments": {
+    "gauges": [{"name": "mid", "position": [1.6, 0.25], "rate_hz": 100}],
+    "diagnostics_rate_hz": 100,
+    "snapshot_rate_hz": 0
+  }
+}
+EOF
+fi
+
+FLUME_GPU_BENCH_SCENE=$scene FLUME_GPU_BENCH_STEPS=$steps FLUME_SOURCE_DIR=$root \
+  "$test_cuda" --gtest_color=no --gtest_filter=CudaBench.* | grep -E '^\||SKIPPED|FAILED' || true
+
+if [[ -n $flume ]]; then
+  echo
+  echo "flume bench --backend cuda:"
+  for p in float double; do
+    "$flume" bench "$scene" --steps "$steps" --backend cuda --set solver.precision="$p" |
+      grep -E '"(precision|particles|steps|wall_s|particle_steps_per_s|grid_mb)"' | tr -d '\n '
+    echo
+  done
+fi
+[[ $tests_failed == 0 ]] || { echo "run_gpu_bench.sh: some CUDA tests failed (above)" >&2; exit 1; }

@@ -1,0 +1,880 @@
+// The CUDA backend of the MLS-MPM solver: the same step as the CPU backend (solver/mpm_solver.cpp), with the
+// physics taken from the same inline functions (solver/mpm_kernels.h), on device arrays.
+//
+// Layout. Particles are structure-of-arrays device vectors, sorted by the grid block (kBlock^D nodes) that
+// holds their stencil's base node, exactly as on the CPU. The grid is block-sparse: after each sort the
+// blocks are rebuilt on the device (radix sort of the particle blocks' 3^D neighbour keys, unique), and each
+// particle block gets a table of its 3^D neighbours' grid block indices. Grid arrays are channel-major
+// (mass, momentum/velocity x D, mass-weighted strain), so memory follows the water as on the CPU. The re-sort
+// criterion is the CPU's: a particle's base node drifting more than one cell out of its sorted block.
+//
+// Scatter. P2G is one thread per particle adding into the grid with atomics (the GPU's, not the CPU's tiles).
+// The sum's order is therefore not fixed: results agree with the CPU, and between GPU runs, to round-off.
+//
+// Instruments. The CPU's InstrumentSet is reused unchanged. Its gauges and probes read particle positions
+// and velocities, which are copied to host mirrors lazily, only when one of them samples (2 D arrays of n
+// values: 24 MB for a million particles in 3D float, about 1-2 ms over PCIe, plus the InstrumentSet's O(n) host
+// loop per gauge or probe). Diagnostics use the energies reduced on the device during G2P: no copy. Load
+// cells sum the wall impulse on the device (atomics into D doubles per wall), copied back each step (a few
+// bytes) only when the scene has load cells.
+//
+// The code uses Thrust only (device_vector, sort, unique, lower_bound, for_each, transform_reduce) with
+// functor structs, so that the same file also compiles with the host compiler against Thrust's sequential
+// C++ system (FLUME_CUDA_EMULATION, see mpm_cuda_emulated.cpp): the tests run every index computation and
+// formula here on the CPU even on a machine without a GPU.
+#include <thrust/binary_search.h>
+#include <thrust/copy.h>
+#include <thrust/device_vector.h>
+#include <thrust/execution_policy.h>
+#include <thrust/fill.h>
+#include <thrust/for_each.h>
+#include <thrust/gather.h>
+#include <thrust/iterator/counting_iterator.h>
+#include <thrust/sequence.h>
+#include <thrust/sort.h>
+#include <thrust/transform_reduce.h>
+#include <thrust/unique.h>
+
+#include <algorithm>
+#include <cfloat>
+#include <cmath>
+#include <cstdint>
+#include <sstream>
+#include <vector>
+
+#ifndef FLUME_CUDA_EMULATION
+#include <cuda_runtime.h>
+#endif
+
+#include "solver/cuda/mpm_cuda.h"
+#include "solver/instruments.h"
+#include "solver/mpm_kernels.h"
+#include "solver/simulation.h"
+
+namespace flume {
+namespace {
+
+namespace thr = THRUST_NS_QUALIFIER;
+using mpm::kBlock;
+
+constexpr int kPad = kBlock;  // nodes of padding below the domain, as on the CPU
+
+// Plain adds in the sequential emulation, hardware atomics on the device (double atomics need sm_60+).
+template <typename T>
+FLUME_HD void atomic_add(T* a, T v) {
+#if defined(__CUDA_ARCH__)
+  atomicAdd(a, v);
+#else
+  *a += v;
+#endif
+}
+
+FLUME_HD bool is_finite(double v) {
+#if defined(__CUDA_ARCH__)
+  return isfinite(v);
+#else
+  return std::isfinite(v);
+#endif
+}
+
+// Block keys: 21 bits per axis, the last axis least significant (the CPU's packing, so blocks sort alike).
+template <int D>
+FLUME_HD uint64_t pack_key(const int* b) {
+  uint64_t k = 0;
+  for (int d = 0; d < D; ++d) k = (k << 21) | static_cast<uint64_t>(b[d] & 0x1FFFFF);
+  return k;
+}
+template <int D>
+FLUME_HD void unpack_key(uint64_t k, int* b) {
+  for (int d = D - 1; d >= 0; --d) {
+    b[d] = static_cast<int>(k & 0x1FFFFF);
+    k >>= 21;
+  }
+}
+
+template <int D, typename T>
+struct Wall {
+  int box = 1;
+  double a[D], b[D];  // box: lo, hi; half-space: point, normal. Node-in-wall is decided in double (as on the CPU).
+  T vb[D];
+  int bc = 0;  // mpm::Bc
+  T mu = 0;
+};
+
+// Everything the kernels read, by value: raw device pointers and the scene's constants.
+template <int D, typename T>
+struct View {
+  static constexpr int kNodes = mpm::Pow<D>::of(kBlock);
+  static constexpr int kNbr = mpm::Pow<D>::of(3);
+  static constexpr int kChannels = D + 2;  // mass, momentum (D), mass-weighted strain J - 1
+
+  // particles
+  T* x[D];
+  T* v[D];
+  T* C[D * D];
+  T* e;
+  const int32_t* pblk;  // index of the particle's (sorted) block in pkeys
+  // blocks and grid
+  const uint64_t* pkeys;
+  const int32_t* p_nbr;  // kNbr grid block indices per particle block
+  const uint64_t* gkeys;
+  T* grid;  // kChannels x nodes, channel-major
+  uint8_t* gwall;
+  size_t nodes;
+  // constants
+  T dx, inv_dx, mp, v0, K, gamma, mu, psi;
+  T grid_lo[D], gravity[D], strain_slope[D];
+  double dx_d, grid_lo_d[D], domain_lo[D], domain_hi[D];
+  const Wall<D, T>* walls;
+  int n_walls;
+  int domain_bc;
+  T domain_mu;
+  double* impulse;  // walls x D, or null when no load cell reads it
+
+  // Grid index of node `node` (global node coordinates) seen from particle block `pb`: the node lies in one
+  // of the block's 3^D neighbours because a particle is re-sorted before its stencil leaves them.
+  FLUME_HD size_t node_index(int32_t pb, const int* blk, const int* node) const {
+    int o = 0, local = 0;
+    for (int d = 0; d < D; ++d) {
+      const int bo = node[d] / kBlock - blk[d];  // -1, 0 or +1; node >= 0 thanks to the padding
+      o = o * 3 + bo + 1;
+      local = local * kBlock + node[d] - (blk[d] + bo) * kBlock;
+    }
+    return static_cast<size_t>(p_nbr[static_cast<size_t>(pb) * kNbr + o]) * kNodes + local;
+  }
+};
+
+template <int D, typename T>
+struct SortKey {
+  View<D, T> s;
+  uint64_t* key;
+  FLUME_HD void operator()(size_t i) const {
+    int b[D];
+    for (int d = 0; d < D; ++d) {
+      const int node = static_cast<int>(std::floor((s.x[d][i] - s.grid_lo[d]) * s.inv_dx - T(0.5)));
+      b[d] = node >= 0 ? node / kBlock : 0;
+    }
+    key[i] = pack_key<D>(b);
+  }
+};
+
+// The 3^D neighbour keys of every particle block (offsets -1, 0, +1 per axis, last axis fastest).
+template <int D>
+struct NeighbourKey {
+  const uint64_t* pkeys;
+  uint64_t* out;
+  FLUME_HD void operator()(size_t j) const {
+    constexpr int kNbr = mpm::Pow<D>::of(3);
+    int b[D];
+    unpack_key<D>(pkeys[j / kNbr], b);
+    int o = static_cast<int>(j % kNbr);
+    for (int d = D - 1; d >= 0; --d) {
+      b[d] += (o % 3) - 1;
+      o /= 3;
+    }
+    out[j] = pack_key<D>(b);
+  }
+};
+
+// P2G, one particle: mass, momentum with the MLS-MPM stress term (Hu et al. 2018, eq. 29) and the
+// mass-weighted strain, less its hydrostatic part (mpm::hydrostatic_strain), scattered with atomics.
+template <int D, typename T>
+struct P2G {
+  View<D, T> s;
+  T dt;
+  FLUME_HD void operator()(size_t i) const {
+    const T dx = s.dx, m = s.mp;
+    const T stress_scale = -dt * s.v0 * T(4) * s.inv_dx * s.inv_dx;
+    const int32_t pb = s.pblk[i];
+    int blk[D], base[D];
+    unpack_key<D>(s.pkeys[pb], blk);
+    T w[D][3], f[D];
+    for (int d = 0; d < D; ++d) {
+      const T xg = (s.x[d][i] - s.grid_lo[d]) * s.inv_dx;
+      base[d] = mpm::stencil_base(xg, f[d]);
+      mpm::bspline_weights(f[d], w[d]);
+    }
+    T Cp[D * D], sigma[D * D], A[D * D];
+    for (int k = 0; k < D * D; ++k) Cp[k] = s.C[k][i];
+    const T e = s.e[i];
+    mpm::fluid_stress<D>(e, Cp, s.K, s.gamma, s.mu, sigma);
+    for (int k = 0; k < D * D; ++k) A[k] = stress_scale * (T(1) + e) * sigma[k] + m * Cp[k];
+    // Momentum carried to node (base + off): m v + A (off - f) dx, split into a constant and a linear part.
+    T mom0[D], xp[D];
+    for (int a = 0; a < D; ++a) {
+      T sum = m * s.v[a][i];
+      for (int b = 0; b < D; ++b) sum -= A[a * D + b] * f[b] * dx;
+      mom0[a] = sum;
+      xp[a] = s.x[a][i];
+    }
+    const T mJ = m * (e - mpm::hydrostatic_strain<D>(xp, s.strain_slope));
+    constexpr int kStencil = mpm::Pow<D>::of(3);
+    for (int q = 0; q < kStencil; ++q) {
+      int off[D], node[D];
+      for (int d = D - 1, r = q; d >= 0; --d, r /= 3) off[d] = r % 3;
+      T wt = w[0][off[0]];
+      for (int d = 1; d < D; ++d) wt *= w[d][off[d]];
+      for (int d = 0; d < D; ++d) node[d] = base[d] + off[d];
+      const size_t idx = s.node_index(pb, blk, node);
+      atomic_add(&s.grid[idx], wt * m);
+      for (int a = 0; a < D; ++a) {
+        T mom = mom0[a];
+        for (int b = 0; b < D; ++b) mom += A[a * D + b] * (T(off[b]) * dx);
+        atomic_add(&s.grid[(1 + a) * s.nodes + idx], wt * mom);
+      }
+      atomic_add(&s.grid[(1 + D) * s.nodes + idx], wt * mJ);
+    }
+  }
+};
+
+// Grid update, one node: momentum to velocity, gravity, the scene's walls (paper eq. 2) in scene order,
+// then the domain box as a container; flags wall nodes for the J-bar average. As MpmSolver::grid_update.
+template <int D, typename T>
+struct GridUpdate {
+  View<D, T> s;
+  T dt;
+  FLUME_HD void operator()(size_t idx) const {
+    constexpr int kNodes = View<D, T>::kNodes;
+    const T m = s.grid[idx];
+    if (m <= T(0)) {
+      for (int c = 0; c < View<D, T>::kChannels; ++c) s.grid[c * s.nodes + idx] = T(0);
+      s.gwall[idx] = 0;
+      return;
+    }
+    int blk[D], node[D];
+    unpack_key<D>(s.gkeys[idx / kNodes], blk);
+    for (int d = D - 1, r = static_cast<int>(idx % kNodes); d >= 0; --d, r /= kBlock)
+      node[d] = blk[d] * kBlock + r % kBlock;
+    T v[D];
+    for (int d = 0; d < D; ++d) v[d] = s.grid[(1 + d) * s.nodes + idx] / m + dt * s.gravity[d];
+    uint8_t on_wall = 0;
+    double xn[D];
+    for (int d = 0; d < D; ++d) xn[d] = s.grid_lo_d[d] + node[d] * s.dx_d;
+    for (int k = 0; k < s.n_walls; ++k) {
+      const Wall<D, T>& w = s.walls[k];
+      double nd[D];
+      const double dist = w.box ? mpm::box_distance<D>(xn, w.a, w.b, nd) : mpm::half_space_distance<D>(xn, w.a, w.b, nd);
+      if (!(dist <= 1e-6 * s.dx_d)) continue;
+      T n[D], before[D];
+      for (int d = 0; d < D; ++d) {
+        n[d] = T(nd[d]);
+        before[d] = v[d];
+      }
+      on_wall = 1;
+      mpm::project_velocity<D>(v, n, w.vb, static_cast<mpm::Bc>(w.bc), w.mu);
+      if (s.impulse)
+        for (int d = 0; d < D; ++d) atomic_add(&s.impulse[k * D + d], double(m) * (before[d] - v[d]));
+    }
+    for (int d = 0; d < D; ++d) {
+      T n[D] = {};
+      if (xn[d] <= s.domain_lo[d] + 1e-6 * s.dx_d) {
+        n[d] = T(1);
+      } else if (xn[d] >= s.domain_hi[d] - 1e-6 * s.dx_d) {
+        n[d] = T(-1);
+      } else {
+        continue;
+      }
+      const T zero[D] = {};
+      mpm::project_velocity<D>(v, n, zero, static_cast<mpm::Bc>(s.domain_bc), s.domain_mu);
+      on_wall = 1;
+    }
+    s.grid[(1 + D) * s.nodes + idx] /= m;
+    s.gwall[idx] = on_wall;
+    for (int d = 0; d < D; ++d) s.grid[(1 + d) * s.nodes + idx] = v[d];
+  }
+};
+
+// G2P, one particle: velocity, APIC matrix, well-balanced J-bar strain (wall nodes left out of the average and
+// the rest renormalised) and position. As MpmSolver::g2p, in the same summation order.
+template <int D, typename T>
+struct G2P {
+  View<D, T> s;
+  T dt;
+  FLUME_HD void operator()(size_t i) const {
+    const T dx = s.dx;
+    const T cscale = T(4) * s.inv_dx * s.inv_dx;
+    const int32_t pb = s.pblk[i];
+    int blk[D], base[D];
+    unpack_key<D>(s.pkeys[pb], blk);
+    T w[D][3], f[D];
+    for (int d = 0; d < D; ++d) {
+      const T xg = (s.x[d][i] - s.grid_lo[d]) * s.inv_dx;
+      base[d] = mpm::stencil_base(xg, f[d]);
+      mpm::bspline_weights(f[d], w[d]);
+    }
+    T vn[D] = {}, Cn[D * D] = {}, Jg = 0, wsum = 0;
+    constexpr int kStencil = mpm::Pow<D>::of(3);
+    for (int q = 0; q < kStencil; ++q) {
+      int off[D], node[D];
+      for (int d = D - 1, r = q; d >= 0; --d, r /= 3) off[d] = r % 3;
+      T wt = w[0][off[0]];
+      for (int d = 1; d < D; ++d) wt *= w[d][off[d]];
+      T dist[D];
+      for (int d = 0; d < D; ++d) {
+        node[d] = base[d] + off[d];
+        dist[d] = (T(off[d]) - f[d]) * dx;
+      }
+      const size_t idx = s.node_index(pb, blk, node);
+      T u[D];
+      for (int a = 0; a < D; ++a) {
+        u[a] = wt * s.grid[(1 + a) * s.nodes + idx];
+        vn[a] += u[a];
+      }
+      for (int a = 0; a < D; ++a)
+        for (int b = 0; b < D; ++b) Cn[a * D + b] += u[a] * dist[b];
+      const T wj = s.gwall[idx] ? T(0) : wt;
+      Jg += wj * s.grid[(1 + D) * s.nodes + idx];
+      wsum += wj;
+    }
+    for (int k = 0; k < D * D; ++k) Cn[k] *= cscale;
+    T xp[D];
+    for (int d = 0; d < D; ++d) xp[d] = s.x[d][i];
+    const bool have_grid = wsum > T(1e-3);
+    const T e_grid = (have_grid ? Jg / wsum : T(0)) + mpm::hydrostatic_strain<D>(xp, s.strain_slope);
+    s.e[i] = mpm::jbar_update(s.e[i], e_grid, mpm::volume_change<D>(Cn, dt), have_grid ? s.psi : T(0));
+    for (int d = 0; d < D; ++d) {
+      s.v[d][i] = vn[d];
+      s.x[d][i] = xp[d] + dt * vn[d];
+    }
+    for (int k = 0; k < D * D; ++k) s.C[k][i] = Cn[k];
+  }
+};
+
+// What the step's audit needs from all particles: energies, the largest speed, the first bad particle and
+// whether any particle drifted out of its sorted block.
+struct Audit {
+  double vmax2 = 0, ke = 0, pe = 0, el = 0;
+  long long bad = -1;  // lowest index of a non-finite or escaped particle
+  int bad_kind = 0;    // 1 non-finite, 2 left the domain
+  int resort = 0;
+};
+struct AuditJoin {
+  FLUME_HD Audit operator()(const Audit& a, const Audit& b) const {
+    Audit r;
+    r.vmax2 = a.vmax2 > b.vmax2 ? a.vmax2 : b.vmax2;
+    r.ke = a.ke + b.ke;
+    r.pe = a.pe + b.pe;
+    r.el = a.el + b.el;
+    const bool take_a = a.bad >= 0 && (b.bad < 0 || a.bad < b.bad);
+    r.bad = take_a ? a.bad : b.bad;
+    r.bad_kind = take_a ? a.bad_kind : b.bad_kind;
+    r.resort = a.resort | b.resort;
+    return r;
+  }
+};
+template <int D, typename T>
+struct AuditParticle {
+  View<D, T> s;
+  double lo_ok[D], hi_ok[D];
+  FLUME_HD Audit operator()(size_t i) const {
+    Audit r;
+    const T e = s.e[i];
+    bool ok = is_finite(double(e)) && e > T(-1);
+    bool inside = true;
+    double v2 = 0, gx = 0;
+    int blk[D];
+    unpack_key<D>(s.pkeys[s.pblk[i]], blk);
+    for (int d = 0; d < D; ++d) {
+      const T xn = s.x[d][i], vn = s.v[d][i];
+      ok = ok && is_finite(double(xn)) && is_finite(double(vn));
+      inside = inside && xn >= T(lo_ok[d]) && xn <= T(hi_ok[d]);
+      v2 += double(vn) * vn;
+      gx += double(s.gravity[d]) * xn;
+      T f;
+      const int nr = mpm::stencil_base((xn - s.grid_lo[d]) * s.inv_dx, f) - (blk[d] * kBlock - 1);
+      if (nr < 0 || nr > kBlock + 1) r.resort = 1;
+    }
+    if (!ok || !inside) {
+      r.bad = static_cast<long long>(i);
+      r.bad_kind = ok ? 2 : 1;
+      return r;
+    }
+    r.vmax2 = v2;
+    r.ke = 0.5 * double(s.mp) * v2;
+    r.pe = -double(s.mp) * gx;
+    r.el = double(s.v0) * mpm::tait_energy_density(double(e), double(s.K), double(s.gamma));
+    return r;
+  }
+};
+
+std::string fmt_point(const double* x, int dim) {
+  std::ostringstream s;
+  s.precision(4);
+  s << "(";
+  for (int d = 0; d < dim; ++d) s << (d ? ", " : "") << x[d];
+  s << ") m";
+  return s.str();
+}
+
+template <typename T>
+T* raw(thr::device_vector<T>& v) {
+  return thr::raw_pointer_cast(v.data());
+}
+
+template <int D, typename T>
+class MpmCuda final : public Simulation {
+  using V = View<D, T>;
+  static constexpr int kNodes = V::kNodes;
+  static constexpr int kNbr = V::kNbr;
+  static constexpr int kChannels = V::kChannels;
+
+ public:
+  MpmCuda(const Scene& scene, const SimulationOptions&) : scene_(scene), instruments_(scene_) {
+    dx_ = scene.solver.dx;
+    inv_dx_ = T(1) / T(dx_);
+    for (int d = 0; d < D; ++d) {
+      grid_lo_[d] = scene.domain_lo[d] - kPad * dx_;
+      gravity_[d] = T(scene.solver.gravity[d]);
+    }
+    const auto& f = scene.fluid;
+    K_ = T(f.bulk_modulus);
+    gamma_ = T(f.gamma);
+    mu_ = T(f.viscosity);
+    psi_ = T(f.jbar_psi);
+    for (int d = 0; d < D; ++d) strain_slope_[d] = T(-f.density * scene.solver.gravity[d] / f.bulk_modulus);
+    c_ = mpm::sound_speed(f.bulk_modulus, f.density);
+    seed_particles();
+    setup_boundaries();
+    sort_particles();
+    const Energy e = energy();
+    energy0_ = e.total();
+    // The CPU backend's slack for the energy audit (see MpmSolver's constructor).
+    double zmin = 1e300, zmax = -1e300;
+    for (const auto& w : scene.water) {
+      zmin = std::min(zmin, w.lo[D - 1]);
+      zmax = std::max(zmax, w.hi[D - 1]);
+    }
+    double g = 0;
+    for (int d = 0; d < D; ++d) g += scene.solver.gravity[d] * scene.solver.gravity[d];
+    energy_slack_ = 0.01 * std::max({e.kinetic, mass_ * std::sqrt(g) * (zmax - zmin), 1e-12});
+    instruments_.sample(*this, 0.0, 0.0, true);
+  }
+
+  RunStatus step() override {
+    if (status_ != RunStatus::kRunning) return status_;
+    double dt = std::min(scene_.solver.max_dt, scene_.solver.cfl * dx_ / (c_ + max_speed_));
+    const double remaining = scene_.solver.end_time - time_;
+    if (dt >= remaining) dt = remaining;
+    if (!(dt > 0)) {
+      status_ = RunStatus::kOk;
+      return status_;
+    }
+    if (needs_sort_) sort_particles();
+    const V s = view();
+    thr::fill(thr::device, grid_.begin(), grid_.end(), T(0));
+    if (has_loads_) thr::fill(thr::device, impulse_.begin(), impulse_.end(), 0.0);
+    thr::counting_iterator<size_t> first(0);
+    thr::for_each(thr::device, first, first + n_, P2G<D, T>{s, T(dt)});
+    thr::for_each(thr::device, first, first + s.nodes, GridUpdate<D, T>{s, T(dt)});
+    if (has_loads_) thr::copy(impulse_.begin(), impulse_.end(), load_impulse_.begin());
+    thr::for_each(thr::device, first, first + n_, G2P<D, T>{s, T(dt)});
+    host_fresh_ = false;
+    audit(T(dt));
+    time_ += dt;
+    dt_ = dt;
+    ++steps_;
+    if (status_ == RunStatus::kUnstable) {
+      instruments_.sample(*this, time_, dt, true);
+      return status_;
+    }
+    instruments_.add_impulses(load_impulse_, dt);
+    instruments_.sample(*this, time_, dt, false);
+    if (time_ >= scene_.solver.end_time - 1e-12) status_ = RunStatus::kOk;
+    return status_;
+  }
+
+  double time() const override { return time_; }
+  double last_dt() const override { return dt_; }
+  long steps() const override { return steps_; }
+  size_t particle_count() const override { return n_; }
+  double total_mass() const override { return mass_; }
+  const Record& record() const override { return instruments_.record(); }
+  const std::string& message() const override { return message_; }
+
+  void particle_positions(std::vector<double>& xyz) const override {
+    sync_host();
+    xyz.assign(3 * n_, 0.0);
+    for (size_t i = 0; i < n_; ++i)
+      for (int d = 0; d < D; ++d) xyz[3 * i + d] = hx_[d][i];
+  }
+  void particle_velocities(std::vector<double>& vel) const override {
+    sync_host();
+    vel.assign(3 * n_, 0.0);
+    for (size_t i = 0; i < n_; ++i)
+      for (int d = 0; d < D; ++d) vel[3 * i + d] = hv_[d][i];
+  }
+  void particle_pressures(std::vector<double>& p) const override {
+    std::vector<T> e(n_);
+    thr::copy(e_.begin(), e_.end(), e.begin());
+    p.resize(n_);
+    for (size_t i = 0; i < n_; ++i) p[i] = mpm::tait_pressure(double(e[i]), double(K_), double(gamma_));
+  }
+  size_t grid_bytes() const override {
+    return grid_.capacity() * sizeof(T) + gwall_.capacity() + (gkeys_.capacity() + pkeys_.capacity()) * sizeof(uint64_t) +
+           p_nbr_.capacity() * sizeof(int32_t);
+  }
+  size_t active_blocks() const override { return gkeys_.size(); }
+  size_t particle_bytes() const override { return n_ * (sizeof(T) * (2 * D + D * D + 1) + sizeof(int32_t)); }
+
+  void momentum(double linear[3], double angular[3]) const override {
+    sync_host();
+    std::vector<T> C[D * D];
+    for (int k = 0; k < D * D; ++k) {
+      C[k].resize(n_);
+      thr::copy(C_[k].begin(), C_[k].end(), C[k].begin());
+    }
+    double L[3] = {0, 0, 0}, A[3] = {0, 0, 0};
+    const double s = mp_ * dx_ * dx_ / 4.0;  // APIC spin term, as MpmSolver::momentum (Jiang et al. 2015, eq. 26)
+    for (size_t i = 0; i < n_; ++i) {
+      double x[3] = {0, 0, 0}, v[3] = {0, 0, 0};
+      for (int d = 0; d < D; ++d) {
+        x[d] = hx_[d][i];
+        v[d] = hv_[d][i];
+      }
+      for (int d = 0; d < 3; ++d) L[d] += mp_ * v[d];
+      if constexpr (D == 3) {
+        A[0] += mp_ * (x[1] * v[2] - x[2] * v[1]) + s * (C[5][i] - C[7][i]);
+        A[1] += mp_ * (x[2] * v[0] - x[0] * v[2]) + s * (C[6][i] - C[2][i]);
+        A[2] += mp_ * (x[0] * v[1] - x[1] * v[0]) + s * (C[1][i] - C[3][i]);
+      } else {
+        A[2] += mp_ * (x[0] * v[1] - x[1] * v[0]) + s * (C[1][i] - C[2][i]);
+      }
+    }
+    for (int d = 0; d < 3; ++d) {
+      linear[d] = L[d];
+      angular[d] = A[d];
+    }
+  }
+
+  void set_rigid_velocity(const double v0[3], const double omega[3], const double centre[3]) override {
+    sync_host();
+    std::vector<T> C[D * D];
+    for (int k = 0; k < D * D; ++k) C[k].resize(n_);
+    for (size_t i = 0; i < n_; ++i) {
+      double r[3] = {0, 0, 0};
+      for (int d = 0; d < D; ++d) r[d] = hx_[d][i] - centre[d];
+      if constexpr (D == 3) {
+        hv_[0][i] = T(v0[0] + omega[1] * r[2] - omega[2] * r[1]);
+        hv_[1][i] = T(v0[1] + omega[2] * r[0] - omega[0] * r[2]);
+        hv_[2][i] = T(v0[2] + omega[0] * r[1] - omega[1] * r[0]);
+        const double W[9] = {0, -omega[2], omega[1], omega[2], 0, -omega[0], -omega[1], omega[0], 0};
+        for (int k = 0; k < 9; ++k) C[k][i] = T(W[k]);
+      } else {
+        hv_[0][i] = T(v0[0] - omega[2] * r[1]);
+        hv_[1][i] = T(v0[1] + omega[2] * r[0]);
+        const double W[4] = {0, -omega[2], omega[2], 0};
+        for (int k = 0; k < 4; ++k) C[k][i] = T(W[k]);
+      }
+    }
+    max_speed_ = 0;
+    for (size_t i = 0; i < n_; ++i) {
+      double s2 = 0;
+      for (int d = 0; d < D; ++d) s2 += double(hv_[d][i]) * hv_[d][i];
+      max_speed_ = std::max(max_speed_, std::sqrt(s2));
+    }
+    for (int d = 0; d < D; ++d) thr::copy(hv_[d].begin(), hv_[d].end(), v_[d].begin());
+    for (int k = 0; k < D * D; ++k) thr::copy(C[k].begin(), C[k].end(), C_[k].begin());
+    energy0_ = energy().total();
+    energy_slack_ = std::max(energy_slack_, 0.01 * energy().kinetic);
+  }
+
+  // --- read access for the instruments (host mirrors, refreshed lazily) ---
+  int dim() const { return D; }
+  size_t n() const { return n_; }
+  T x(int d, size_t i) const {
+    if (!host_fresh_) sync_host();
+    return hx_[d][i];
+  }
+  T v(int d, size_t i) const {
+    if (!host_fresh_) sync_host();
+    return hv_[d][i];
+  }
+  double particle_spacing() const { return spacing_; }
+  double particle_mass() const { return mp_; }
+  double max_speed() const { return max_speed_; }
+
+  struct Energy {
+    double kinetic = 0, potential = 0, elastic = 0;
+    double total() const { return kinetic + potential + elastic; }
+  };
+  Energy energy() const {
+    const Audit a = reduce_audit();
+    return {a.ke, a.pe, a.el};
+  }
+  const Energy& last_energy() const { return last_energy_; }
+  const Scene& scene() const { return scene_; }
+
+ private:
+  // As MpmSolver::seed_particles: a regular lattice of ppc^(1/D) particles per cell per axis in each water box,
+  // hydrostatically preloaded where asked.
+  void seed_particles() {
+    const int per_axis = static_cast<int>(std::lround(std::pow(scene_.solver.ppc, 1.0 / D)));
+    spacing_ = dx_ / per_axis;
+    v0_ = std::pow(spacing_, D);
+    mp_ = scene_.fluid.density * v0_;
+    std::vector<T> pos[D], strain;
+    for (size_t w = 0; w < scene_.water.size(); ++w) {
+      const auto& box = scene_.water[w];
+      long count[D];
+      for (int d = 0; d < D; ++d) count[d] = std::max(1L, std::lround((box.hi[d] - box.lo[d]) / spacing_));
+      long total = 1;
+      for (int d = 0; d < D; ++d) total *= count[d];
+      for (long k = 0; k < total; ++k) {
+        long r = k;
+        double p[D];
+        for (int d = D - 1; d >= 0; --d) {
+          const long idx = r % count[d];
+          r /= count[d];
+          p[d] = box.lo[d] + (idx + 0.5) * (box.hi[d] - box.lo[d]) / count[d];
+        }
+        bool dup = false;
+        for (size_t u = 0; u < w && !dup; ++u) {
+          bool in = true;
+          for (int d = 0; d < D; ++d) in &= p[d] >= scene_.water[u].lo[d] && p[d] < scene_.water[u].hi[d];
+          dup = in;
+        }
+        if (dup) continue;
+        for (int d = 0; d < D; ++d) pos[d].push_back(T(p[d]));
+        double e = 0;
+        if (box.hydrostatic) {
+          const double head = std::max(0.0, box.surface - p[D - 1]);
+          const double pressure = scene_.fluid.density * std::fabs(scene_.solver.gravity[D - 1]) * head;
+          const double g = scene_.fluid.gamma;
+          e = std::expm1(-std::log1p(g * pressure / scene_.fluid.bulk_modulus) / g);
+        }
+        strain.push_back(T(e));
+      }
+    }
+    n_ = pos[0].size();
+    for (int d = 0; d < D; ++d) {
+      x_[d].assign(pos[d].begin(), pos[d].end());
+      v_[d].assign(n_, T(0));
+    }
+    for (int k = 0; k < D * D; ++k) C_[k].assign(n_, T(0));
+    e_.assign(strain.begin(), strain.end());
+    mass_ = mp_ * n_;
+    pblk_.resize(n_);
+    keys_.resize(n_);
+    order_.resize(n_);
+    tmp_.resize(n_);
+  }
+
+  void setup_boundaries() {
+    std::vector<Wall<D, T>> walls;
+    for (const auto& b : scene_.boundaries) {
+      Wall<D, T> w;
+      w.box = b.shape.type == ShapeType::kBox;
+      for (int d = 0; d < D; ++d) {
+        w.a[d] = w.box ? b.shape.lo[d] : b.shape.point[d];
+        w.b[d] = w.box ? b.shape.hi[d] : b.shape.normal[d];
+        w.vb[d] = T(b.velocity[d]);
+      }
+      w.bc = static_cast<int>(b.condition);
+      w.mu = T(b.friction);
+      walls.push_back(w);
+    }
+    walls_.assign(walls.begin(), walls.end());
+    n_walls_ = static_cast<int>(walls.size());
+    domain_bc_ = static_cast<int>(scene_.domain_walls);
+    domain_mu_ = T(scene_.domain_wall_friction);
+    load_impulse_.assign(walls.size() * D, 0.0);
+    has_loads_ = !scene_.instruments.loads.empty() && !walls.empty();
+    impulse_.assign(walls.size() * D, 0.0);
+  }
+
+  V view() {
+    V s{};
+    for (int d = 0; d < D; ++d) {
+      s.x[d] = raw(x_[d]);
+      s.v[d] = raw(v_[d]);
+      s.grid_lo[d] = T(grid_lo_[d]);
+      s.grid_lo_d[d] = grid_lo_[d];
+      s.gravity[d] = gravity_[d];
+      s.strain_slope[d] = strain_slope_[d];
+      s.domain_lo[d] = scene_.domain_lo[d];
+      s.domain_hi[d] = scene_.domain_hi[d];
+    }
+    for (int k = 0; k < D * D; ++k) s.C[k] = raw(C_[k]);
+    s.e = raw(e_);
+    s.pblk = raw(pblk_);
+    s.pkeys = raw(pkeys_);
+    s.p_nbr = raw(p_nbr_);
+    s.gkeys = raw(gkeys_);
+    s.grid = raw(grid_);
+    s.gwall = raw(gwall_);
+    s.nodes = gkeys_.size() * kNodes;
+    s.dx = T(dx_);
+    s.inv_dx = inv_dx_;
+    s.mp = T(mp_);
+    s.v0 = T(v0_);
+    s.K = K_;
+    s.gamma = gamma_;
+    s.mu = mu_;
+    s.psi = psi_;
+    s.dx_d = dx_;
+    s.walls = raw(walls_);
+    s.n_walls = n_walls_;
+    s.domain_bc = domain_bc_;
+    s.domain_mu = domain_mu_;
+    s.impulse = has_loads_ ? raw(impulse_) : nullptr;
+    return s;
+  }
+
+  // Sorts particles by block and rebuilds the sparse block lists, all on the device.
+  void sort_particles() {
+    thr::counting_iterator<size_t> first(0);
+    thr::for_each(thr::device, first, first + n_, SortKey<D, T>{view(), raw(keys_)});
+    thr::sequence(thr::device, order_.begin(), order_.end());
+    thr::stable_sort_by_key(thr::device, keys_.begin(), keys_.end(), order_.begin());
+    auto permute = [&](thr::device_vector<T>& a) {
+      thr::gather(thr::device, order_.begin(), order_.end(), a.begin(), tmp_.begin());
+      a.swap(tmp_);
+    };
+    for (int d = 0; d < D; ++d) {
+      permute(x_[d]);
+      permute(v_[d]);
+    }
+    for (int k = 0; k < D * D; ++k) permute(C_[k]);
+    permute(e_);
+    // Particle blocks, and each particle's block index.
+    pkeys_.resize(n_);
+    pkeys_.resize(thr::unique_copy(thr::device, keys_.begin(), keys_.end(), pkeys_.begin()) - pkeys_.begin());
+    thr::lower_bound(thr::device, pkeys_.begin(), pkeys_.end(), keys_.begin(), keys_.end(), pblk_.begin());
+    // Grid blocks: the 3^D neighbourhood of every particle block; each particle block's neighbour table.
+    const size_t nn = pkeys_.size() * kNbr;
+    nbr_keys_.resize(nn);
+    thr::for_each(thr::device, first, first + nn, NeighbourKey<D>{raw(pkeys_), raw(nbr_keys_)});
+    gkeys_.resize(nn);
+    thr::copy(thr::device, nbr_keys_.begin(), nbr_keys_.end(), gkeys_.begin());
+    thr::sort(thr::device, gkeys_.begin(), gkeys_.end());
+    gkeys_.resize(thr::unique(thr::device, gkeys_.begin(), gkeys_.end()) - gkeys_.begin());
+    p_nbr_.resize(nn);
+    thr::lower_bound(thr::device, gkeys_.begin(), gkeys_.end(), nbr_keys_.begin(), nbr_keys_.end(), p_nbr_.begin());
+    const size_t nodes = gkeys_.size() * kNodes;
+    grid_.resize(kChannels * nodes);
+    gwall_.resize(nodes);
+    needs_sort_ = false;
+  }
+
+  Audit reduce_audit() const {
+    V s = const_cast<MpmCuda*>(this)->view();
+    AuditParticle<D, T> op{s, {}, {}};
+    for (int d = 0; d < D; ++d) {
+      op.lo_ok[d] = scene_.domain_lo[d] - dx_;
+      op.hi_ok[d] = scene_.domain_hi[d] + dx_;
+    }
+    thr::counting_iterator<size_t> first(0);
+    return thr::transform_reduce(thr::device, first, first + n_, op, Audit{}, AuditJoin{});
+  }
+
+  // The CPU's checks after G2P: NaN/Inf or escaped particles, then energy growth; and the re-sort flag.
+  void audit(T dt) {
+    const Audit a = reduce_audit();
+    max_speed_ = std::sqrt(a.vmax2);
+    needs_sort_ = a.resort != 0;
+    const double t_new = time_ + double(dt);
+    if (a.bad >= 0) {
+      double xp[D];
+      for (int d = 0; d < D; ++d) xp[d] = double(T(x_[d][a.bad]));
+      std::ostringstream s;
+      s << (a.bad_kind == 1 ? "non-finite value (NaN/Inf) or non-positive volume ratio J" : "a particle left the domain")
+        << " at t = " << t_new << " s (step " << steps_ + 1 << ", dt = " << double(dt) << " s), particle " << a.bad
+        << " at " << fmt_point(xp, D) << "; try a smaller solver.cfl or a finer solver.dx";
+      fail(s.str());
+      return;
+    }
+    const double e = a.ke + a.pe + a.el;
+    if (e > energy0_ + energy_slack_) {
+      std::ostringstream s;
+      s << "energy grew beyond what gravity and forcing supply at t = " << t_new << " s (step " << steps_ + 1
+        << "): total " << e << " J against " << energy0_ << " J initially (max speed " << max_speed_
+        << " m/s); try a smaller solver.cfl";
+      fail(s.str());
+    }
+    last_energy_ = {a.ke, a.pe, a.el};
+  }
+
+  void fail(const std::string& what) {
+    status_ = RunStatus::kUnstable;
+    message_ = what;
+  }
+
+  void sync_host() const {
+    for (int d = 0; d < D; ++d) {
+      hx_[d].resize(n_);
+      hv_[d].resize(n_);
+      thr::copy(x_[d].begin(), x_[d].end(), hx_[d].begin());
+      thr::copy(v_[d].begin(), v_[d].end(), hv_[d].begin());
+    }
+    host_fresh_ = true;
+  }
+
+  Scene scene_;
+  InstrumentSet<MpmCuda> instruments_;
+  double dx_ = 0;
+  T inv_dx_ = 0;
+  double grid_lo_[D] = {};
+  T gravity_[D] = {};
+  T K_ = 0, gamma_ = 0, mu_ = 0, psi_ = 0;
+  T strain_slope_[D] = {};
+  double c_ = 0;
+  double spacing_ = 0, v0_ = 0, mp_ = 0, mass_ = 0;
+  size_t n_ = 0;
+  // device: particles (e: volumetric strain J - 1), sort scratch, blocks, grid, walls
+  thr::device_vector<T> x_[D], v_[D], C_[D * D], e_, tmp_;
+  thr::device_vector<int32_t> pblk_, p_nbr_;
+  thr::device_vector<uint32_t> order_;
+  thr::device_vector<uint64_t> keys_, pkeys_, gkeys_, nbr_keys_;
+  thr::device_vector<T> grid_;
+  thr::device_vector<uint8_t> gwall_;
+  thr::device_vector<Wall<D, T>> walls_;
+  thr::device_vector<double> impulse_;
+  int n_walls_ = 0;
+  int domain_bc_ = 2;
+  T domain_mu_ = 0;
+  bool has_loads_ = false;
+  // host
+  mutable std::vector<T> hx_[D], hv_[D];
+  mutable bool host_fresh_ = false;
+  std::vector<double> load_impulse_;
+  bool needs_sort_ = true;
+  double time_ = 0, dt_ = 0, max_speed_ = 0;
+  long steps_ = 0;
+  double energy0_ = 0, energy_slack_ = 0;
+  Energy last_energy_;
+  RunStatus status_ = RunStatus::kRunning;
+  std::string message_;
+};
+
+std::unique_ptr<Simulation> make(const Scene& scene, const SimulationOptions& options) {
+  const bool f = scene.solver.precision == Precision::kFloat;
+  if (scene.dimension == 2) {
+    if (f) return std::make_unique<MpmCuda<2, float>>(scene, options);
+    return std::make_unique<MpmCuda<2, double>>(scene, options);
+  }
+  if (f) return std::make_unique<MpmCuda<3, float>>(scene, options);
+  return std::make_unique<MpmCuda<3, double>>(scene, options);
+}
+
+}  // namespace
+
+#ifdef FLUME_CUDA_EMULATION
+std::unique_ptr<Simulation> make_cuda_host_emulation(const Scene& scene, const SimulationOptions& options) {
+  return make(scene, options);
+}
+#else
+std::unique_ptr<Simulation> make_cuda_simulation(const Scene& scene, const SimulationOptions& options) {
+  return make(scene, options);
+}
+
+bool cuda_device_present() {
+  int count = 0;
+  if (cudaGetDeviceCount(&count) != cudaSuccess) {
+    cudaGetLastError();  // clear the sticky error: no driver or no device is an answer, not a failure
+    return false;
+  }
+  return count > 0;
+}
+#endif
+
+}  // namespace flume
