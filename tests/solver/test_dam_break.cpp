@@ -5,7 +5,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 
+#include "common/plot/figure.h"
 #include "solver/scene.h"
 #include "solver/simulation.h"
 #include "test_util.h"
@@ -103,6 +105,29 @@ TEST(MartinMoyce, FrontMatchesTable2AndConverges) {
   const double d01 = diff(curves[0], curves[1]), d12 = diff(curves[1], curves[2]);
   std::printf("successive differences: |a/10 - a/20| = %.4f, |a/20 - a/40| = %.4f\n", d01, d12);
   EXPECT_LT(d12, d01);
+
+  // FLUME_PLOT_DIR=DIR: the three fronts, shifted by the fitted dT, against Table 2 (docs/validation.md).
+  if (const char* dir = std::getenv("FLUME_PLOT_DIR")) {
+    plot::Figure fig;
+    auto& ax = fig.axes().title("Martin & Moyce (1952), n^2 = 2: surge front").xlabel("T = t sqrt(2g/a)");
+    ax.ylabel("Z = z / a").xlim(0, 3.2);
+    std::vector<double> tx, zx;
+    for (const auto& r : data) {
+      tx.push_back(r[0]);
+      zx.push_back(r[1]);
+    }
+    for (int k = 0; k < 3; ++k) {
+      const Fit f = fit_shift(curves[k], data);
+      std::vector<double> T;
+      for (double t : curves[k].T) T.push_back(t + f.shift);
+      char label[64];
+      std::snprintf(label, sizeof label, "flume dx = a/%d, dT = %+.2f", 10 << k, f.shift);
+      ax.line(T, curves[k].Z, {.color = plot::palette(k), .label = label});
+    }
+    ax.scatter(tx, zx, {.color = plot::Color{0, 0, 0}, .label = "Martin & Moyce Table 2"});
+    ax.legend(plot::Legend::kUpperLeft);
+    fig.save(std::string(dir) + "/martin_moyce_1952.svg");
+  }
 }
 
 }  // namespace

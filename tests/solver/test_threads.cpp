@@ -1,0 +1,122 @@
+// Thread-count independence (issue 2, item 8's last sentence). The OpenMP scatter is race-free and
+// order-deterministic by design: each particle block scatters into its private tile, and each grid block
+// gathers its neighbours' tiles in a fixed order, so no sum's order depends on the threads. The particle
+// state and everything computed from it serially (gauges, probes, dt) must therefore be BITWISE identical
+// with 1, 2 and 3 threads. Only the OpenMP reductions (energies in the diagnostics, the per-thread load
+// impulses) may differ, and only by round-off of their double sums.
+#include <gtest/gtest.h>
+#include <omp.h>
+
+#include <cmath>
+#include <string>
+
+#include "solver/scene.h"
+#include "solver/simulation.h"
+#include "test_util.h"
+
+namespace flume {
+namespace {
+
+struct State {
+  std::vector<double> xyz, vel, p;
+  Record record;
+  long steps = 0;
+};
+
+State run(const Scene& scene, int threads) {
+  SimulationOptions o;
+  o.threads = threads;
+  auto sim = make_simulation(scene, o);
+  EXPECT_EQ(omp_get_max_threads(), threads);
+  EXPECT_EQ(test::run_until(*sim, scene.solver.end_time), RunStatus::kOk) << sim->message();
+  State s;
+  sim->particle_positions(s.xyz);
+  sim->particle_velocities(s.vel);
+  sim->particle_pressures(s.p);
+  s.record = sim->record();
+  s.steps = sim->steps();
+  return s;
+}
+
+// max |a - b| / max |a| over two series of equal length.
+double rel_diff(const std::vector<double>& a, const std::vector<double>& b) {
+  EXPECT_EQ(a.size(), b.size());
+  double d = 0, s = 0;
+  for (size_t i = 0; i < std::min(a.size(), b.size()); ++i) {
+    d = std::max(d, std::fabs(a[i] - b[i]));
+    s = std::max(s, std::fabs(a[i]));
+  }
+  return s > 0 ? d / s : d;
+}
+
+void compare(const Scene& scene) {
+  const State one = run(scene, 1);
+  for (int threads : {2, 3}) {
+    SCOPED_TRACE(std::to_string(threads) + " threads");
+    const State many = run(scene, threads);
+    EXPECT_EQ(many.steps, one.steps);
+    // Bitwise.
+    EXPECT_TRUE(many.xyz == one.xyz) << "positions differ";
+    EXPECT_TRUE(many.vel == one.vel) << "velocities differ";
+    EXPECT_TRUE(many.p == one.p) << "pressures differ";
+    for (const auto& [name, ts] : one.record.gauges)
+      EXPECT_TRUE(many.record.gauges.at(name).values == ts.values) << name;
+    for (const auto& [name, ts] : one.record.probes) {
+      // A dry probe reads NaN, which never compares equal: compare the bit patterns' meaning instead.
+      const auto& other = many.record.probes.at(name).values;
+      ASSERT_EQ(other.size(), ts.values.size());
+      for (size_t i = 0; i < other.size(); ++i)
+        EXPECT_TRUE(other[i] == ts.values[i] || (std::isnan(other[i]) && std::isnan(ts.values[i])))
+            << name << " " << i;
+    }
+    EXPECT_TRUE(many.record.diagnostics.at("dt") == one.record.diagnostics.at("dt"));
+    EXPECT_TRUE(many.record.diagnostics.at("max_speed") == one.record.diagnostics.at("max_speed"));
+    // Round-off of double reductions: a few ulps of the largest value.
+    for (const char* k : {"kinetic", "potential", "elastic", "total"}) {
+      const double r = rel_diff(one.record.diagnostics.at(k), many.record.diagnostics.at(k));
+      EXPECT_LT(r, 1e-12) << k;
+    }
+    for (const auto& [name, ts] : one.record.loads) {
+      double peak = 0;
+      for (double f : ts.values) peak = std::max(peak, std::fabs(f));
+      EXPECT_GT(peak, 1.0) << name
+                           << ": the water must load the boundary for the comparison to mean anything";
+      const double r = rel_diff(ts.values, many.record.loads.at(name).values);
+      std::printf("[ info ] %d threads: load '%s' (peak %.3g N) differs by %.2e relative\n", threads,
+                  name.c_str(), peak, r);
+      EXPECT_LT(r, 1e-12) << name;
+    }
+  }
+  std::printf("[ info ] %zu particles, %ld steps: particle state bitwise identical with 1, 2 and 3 threads\n",
+              one.xyz.size() / 3, one.steps);
+}
+
+Scene dam_break(const std::string& precision, double end_time) {
+  return load_scene(
+      std::string(FLUME_SOURCE_DIR) + "/scenes/dam_break/martin_moyce_2d.json",
+      {{"solver.dx", "0.005"},
+       {"solver.precision", precision},
+       {"solver.end_time", std::to_string(end_time)},
+       {"instruments.snapshot_rate_hz", "0"},
+       {"instruments.probes", R"([{"name": "p1", "position": [0.05, 0.01]}])"},
+       {"instruments.loads", R"([{"name": "back_load", "boundary": "back_wall", "rate_hz": 1000}])"}});
+}
+
+TEST(Threads, DamBreak2DDouble) { compare(dam_break("double", 0.1)); }
+TEST(Threads, DamBreak2DFloat) { compare(dam_break("float", 0.1)); }
+
+TEST(Threads, DamBreak3DFloat) {
+  const std::string text = R"({"name": "dam3d", "dimension": 3,
+    "domain": {"lo": [0.0, 0.0, 0.0], "hi": [0.6, 0.2, 0.3], "walls": "separate", "friction": 0.2},
+    "solver": {"dx": 0.02, "ppc": 8, "precision": "float", "end_time": 0.15},
+    "fluid": {"bulk_modulus": 2.0e6, "jbar_psi": 0.9},
+    "water": [{"lo": [0.04, 0.04, 0.04], "hi": [0.2, 0.16, 0.2]}],
+    "boundaries": [{"name": "column", "type": "box", "lo": [0.26, 0.08, 0.0], "hi": [0.3, 0.12, 0.3]}],
+    "instruments": {"gauges": [{"name": "g", "position": [0.3, 0.1]}],
+                    "loads": [{"name": "column", "boundary": "column"}]}
+  })";
+  compare(parse_scene_text(text, "dam3d.json"));
+}
+
+}  // namespace
+}  // namespace flume
