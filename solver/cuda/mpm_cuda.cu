@@ -785,10 +785,24 @@ class MpmCuda final : public Simulation {
     }
     const double e = a.ke + a.pe + a.el;
     if (e > energy0_ + energy_slack_) {
+      // Where: the fastest particle, found on the host (this runs once, when the run stops).
+      sync_host();
+      size_t fastest = 0;
+      double best = -1;
+      for (size_t i = 0; i < n_; ++i) {
+        double v2 = 0;
+        for (int d = 0; d < D; ++d) v2 += double(hv_[d][i]) * hv_[d][i];
+        if (v2 > best) {
+          best = v2;
+          fastest = i;
+        }
+      }
+      double xf[D];
+      for (int d = 0; d < D; ++d) xf[d] = hx_[d][fastest];
       std::ostringstream s;
       s << "energy grew beyond what gravity and forcing supply at t = " << t_new << " s (step " << steps_ + 1
         << "): total " << e << " J against " << energy0_ << " J initially (max speed " << max_speed_
-        << " m/s); try a smaller solver.cfl";
+        << " m/s, particle " << fastest << " at " << fmt_point(xf, D) << "); try a smaller solver.cfl";
       fail(s.str());
     }
     last_energy_ = {a.ke, a.pe, a.el};
