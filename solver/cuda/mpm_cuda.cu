@@ -13,8 +13,8 @@
 //
 // Instruments. The CPU's InstrumentSet is reused unchanged. Its gauges and probes read particle positions
 // and velocities, which are copied to host mirrors lazily, only when one of them samples (2 D arrays of n
-// values: 24 MB for a million particles in 3D float, about 1-2 ms over PCIe, plus the InstrumentSet's O(n) host
-// loop per gauge or probe). Diagnostics use the energies reduced on the device during G2P: no copy. Load
+// values: 24 MB for a million particles in 3D float, about 1-2 ms over PCIe, plus the InstrumentSet's O(n)
+// host loop per gauge or probe). Diagnostics use the energies reduced on the device during G2P: no copy. Load
 // cells sum the wall impulse on the device (atomics into D doubles per wall), copied back each step (a few
 // bytes) only when the scene has load cells.
 //
@@ -95,7 +95,8 @@ FLUME_HD void unpack_key(uint64_t k, int* b) {
 template <int D, typename T>
 struct Wall {
   int box = 1;
-  double a[D], b[D];  // box: lo, hi; half-space: point, normal. Node-in-wall is decided in double (as on the CPU).
+  double a[D],
+      b[D];  // box: lo, hi; half-space: point, normal. Node-in-wall is decided in double (as on the CPU).
   T vb[D];
   int bc = 0;  // mpm::Bc
   T mu = 0;
@@ -253,7 +254,8 @@ struct GridUpdate {
     for (int k = 0; k < s.n_walls; ++k) {
       const Wall<D, T>& w = s.walls[k];
       double nd[D];
-      const double dist = w.box ? mpm::box_distance<D>(xn, w.a, w.b, nd) : mpm::half_space_distance<D>(xn, w.a, w.b, nd);
+      const double dist =
+          w.box ? mpm::box_distance<D>(xn, w.a, w.b, nd) : mpm::half_space_distance<D>(xn, w.a, w.b, nd);
       if (!(dist <= 1e-6 * s.dx_d)) continue;
       T n[D], before[D];
       for (int d = 0; d < D; ++d) {
@@ -284,8 +286,8 @@ struct GridUpdate {
   }
 };
 
-// G2P, one particle: velocity, APIC matrix, well-balanced J-bar strain (wall nodes left out of the average and
-// the rest renormalised) and position. As MpmSolver::g2p, in the same summation order.
+// G2P, one particle: velocity, APIC matrix, well-balanced J-bar strain (wall nodes left out of the average
+// and the rest renormalised) and position. As MpmSolver::g2p, in the same summation order.
 template <int D, typename T>
 struct G2P {
   View<D, T> s;
@@ -510,8 +512,8 @@ class MpmCuda final : public Simulation {
     for (size_t i = 0; i < n_; ++i) p[i] = mpm::tait_pressure(double(e[i]), double(K_), double(gamma_));
   }
   size_t grid_bytes() const override {
-    return grid_.capacity() * sizeof(T) + gwall_.capacity() + (gkeys_.capacity() + pkeys_.capacity()) * sizeof(uint64_t) +
-           p_nbr_.capacity() * sizeof(int32_t);
+    return grid_.capacity() * sizeof(T) + gwall_.capacity() +
+           (gkeys_.capacity() + pkeys_.capacity()) * sizeof(uint64_t) + p_nbr_.capacity() * sizeof(int32_t);
   }
   size_t active_blocks() const override { return gkeys_.size(); }
   size_t particle_bytes() const override { return n_ * (sizeof(T) * (2 * D + D * D + 1) + sizeof(int32_t)); }
@@ -524,7 +526,8 @@ class MpmCuda final : public Simulation {
       thr::copy(C_[k].begin(), C_[k].end(), C[k].begin());
     }
     double L[3] = {0, 0, 0}, A[3] = {0, 0, 0};
-    const double s = mp_ * dx_ * dx_ / 4.0;  // APIC spin term, as MpmSolver::momentum (Jiang et al. 2015, eq. 26)
+    const double s =
+        mp_ * dx_ * dx_ / 4.0;  // APIC spin term, as MpmSolver::momentum (Jiang et al. 2015, eq. 26)
     for (size_t i = 0; i < n_; ++i) {
       double x[3] = {0, 0, 0}, v[3] = {0, 0, 0};
       for (int d = 0; d < D; ++d) {
@@ -605,8 +608,8 @@ class MpmCuda final : public Simulation {
   const Scene& scene() const { return scene_; }
 
  private:
-  // As MpmSolver::seed_particles: a regular lattice of ppc^(1/D) particles per cell per axis in each water box,
-  // hydrostatically preloaded where asked.
+  // As MpmSolver::seed_particles: a regular lattice of ppc^(1/D) particles per cell per axis in each water
+  // box, hydrostatically preloaded where asked.
   void seed_particles() {
     const int per_axis = static_cast<int>(std::lround(std::pow(scene_.solver.ppc, 1.0 / D)));
     spacing_ = dx_ / per_axis;
@@ -749,7 +752,8 @@ class MpmCuda final : public Simulation {
     thr::sort(thr::device, gkeys_.begin(), gkeys_.end());
     gkeys_.resize(thr::unique(thr::device, gkeys_.begin(), gkeys_.end()) - gkeys_.begin());
     p_nbr_.resize(nn);
-    thr::lower_bound(thr::device, gkeys_.begin(), gkeys_.end(), nbr_keys_.begin(), nbr_keys_.end(), p_nbr_.begin());
+    thr::lower_bound(thr::device, gkeys_.begin(), gkeys_.end(), nbr_keys_.begin(), nbr_keys_.end(),
+                     p_nbr_.begin());
     const size_t nodes = gkeys_.size() * kNodes;
     grid_.resize(kChannels * nodes);
     gwall_.resize(nodes);
@@ -777,9 +781,10 @@ class MpmCuda final : public Simulation {
       double xp[D];
       for (int d = 0; d < D; ++d) xp[d] = double(T(x_[d][a.bad]));
       std::ostringstream s;
-      s << (a.bad_kind == 1 ? "non-finite value (NaN/Inf) or non-positive volume ratio J" : "a particle left the domain")
-        << " at t = " << t_new << " s (step " << steps_ + 1 << ", dt = " << double(dt) << " s), particle " << a.bad
-        << " at " << fmt_point(xp, D) << "; try a smaller solver.cfl or a finer solver.dx";
+      s << (a.bad_kind == 1 ? "non-finite value (NaN/Inf) or non-positive volume ratio J"
+                            : "a particle left the domain")
+        << " at t = " << t_new << " s (step " << steps_ + 1 << ", dt = " << double(dt) << " s), particle "
+        << a.bad << " at " << fmt_point(xp, D) << "; try a smaller solver.cfl or a finer solver.dx";
       fail(s.str());
       return;
     }

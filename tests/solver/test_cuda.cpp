@@ -14,6 +14,7 @@
 //    block-sparse bookkeeping, the scatter/gather indexing and every formula of mpm_cuda.cu.
 //  - Cuda: the real device, skipped (GTEST_SKIP) without one.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
@@ -23,7 +24,6 @@
 #include <filesystem>
 #include <functional>
 #include <string>
-#include <unistd.h>
 
 #include "solver/cuda/mpm_cuda.h"
 #include "solver/scene.h"
@@ -75,48 +75,56 @@ Scene column(int dim, const std::string& precision, double end_time) {
     walls += R"({"type": "half_space", "point": )" + vec(0.1, d) + R"(, "normal": )" + vec(-1.0, d) +
              R"(, "condition": "slip"},)";
   }
-  walls += R"({"name": "floor", "type": "half_space", "point": )" + std::string(d2 ? "[0.0, 0.0]" : "[0.0, 0.0, 0.0]") +
-           R"(, "normal": )" + std::string(d2 ? "[0.0, 1.0]" : "[0.0, 0.0, 1.0]") + R"(, "condition": "slip"})";
+  walls += R"({"name": "floor", "type": "half_space", "point": )" +
+           std::string(d2 ? "[0.0, 0.0]" : "[0.0, 0.0, 0.0]") + R"(, "normal": )" +
+           std::string(d2 ? "[0.0, 1.0]" : "[0.0, 0.0, 1.0]") + R"(, "condition": "slip"})";
   const std::string text = R"({"name": "column", "dimension": )" + std::to_string(dim) + R"(,
-    "domain": {"lo": )" + std::string(d2 ? "[-0.04, -0.04]" : "[-0.04, -0.04, -0.04]") + R"(, "hi": )" +
-                           (d2 ? "[0.14, 0.3]" : "[0.14, 0.14, 0.3]") + R"(},
-    "solver": {"dx": 0.01, "ppc": )" + (d2 ? "4" : "8") + R"(, "cfl": 0.4, "precision": ")" + precision +
+    "domain": {"lo": )" + std::string(d2 ? "[-0.04, -0.04]" : "[-0.04, -0.04, -0.04]") +
+                           R"(, "hi": )" + (d2 ? "[0.14, 0.3]" : "[0.14, 0.14, 0.3]") + R"(},
+    "solver": {"dx": 0.01, "ppc": )" +
+                           (d2 ? "4" : "8") + R"(, "cfl": 0.4, "precision": ")" + precision +
                            R"(", "end_time": )" + std::to_string(end_time) + R"(},
     "fluid": {"bulk_modulus": 2.0e6, "gamma": 7.0, "viscosity": 1.0e-3, "jbar_psi": 0.9},
-    "water": [{"lo": )" + (d2 ? "[0.0, 0.0]" : "[0.0, 0.0, 0.0]") + R"(, "hi": )" +
-                           (d2 ? "[0.1, 0.2]" : "[0.1, 0.1, 0.2]") + R"(, "hydrostatic": false}],
-    "boundaries": [)" + walls + R"(],
+    "water": [{"lo": )" + (d2 ? "[0.0, 0.0]" : "[0.0, 0.0, 0.0]") +
+                           R"(, "hi": )" + (d2 ? "[0.1, 0.2]" : "[0.1, 0.1, 0.2]") +
+                           R"(, "hydrostatic": false}],
+    "boundaries": [)" + walls +
+                           R"(],
     "instruments": {"loads": [{"name": "floor", "boundary": "floor", "rate_hz": 100}],
-                    "probes": [{"name": "mid", "position": )" + (d2 ? "[0.05, 0.1]" : "[0.05, 0.05, 0.1]") + R"(}]}
+                    "probes": [{"name": "mid", "position": )" +
+                           (d2 ? "[0.05, 0.1]" : "[0.05, 0.05, 0.1]") + R"(}]}
   })";
   return parse_scene_text(text, "column.json");
 }
 
 Scene martin_moyce(double dx, const std::string& precision) {
   return load_scene(source_dir() + "/scenes/dam_break/martin_moyce_2d.json",
-                    {{"solver.dx", std::to_string(dx)}, {"solver.precision", precision},
+                    {{"solver.dx", std::to_string(dx)},
+                     {"solver.precision", precision},
                      {"instruments.snapshot_rate_hz", "0"}});
 }
 
 // What two backends' runs of one scene differ by.
 struct Difference {
-  double position = 0;   // largest |x_a - x_b| over particles and axes (m)
-  double pressure = 0;   // largest |p_a - p_b| over particles (Pa)
-  double front = 0;      // largest difference of the leading edge (largest x) over the run's steps (m)
-  double floor_load = 0; // largest difference of the floor load cell's samples, relative to the weight
-  double gauge = 0;      // largest difference of gauge samples (m)
-  double probe = 0;      // largest difference of probe samples (m/s)
-  double energy = 0;     // largest difference of the total energy diagnostic, relative to the potential energy
+  double position = 0;    // largest |x_a - x_b| over particles and axes (m)
+  double pressure = 0;    // largest |p_a - p_b| over particles (Pa)
+  double front = 0;       // largest difference of the leading edge (largest x) over the run's steps (m)
+  double floor_load = 0;  // largest difference of the floor load cell's samples, relative to the weight
+  double gauge = 0;       // largest difference of gauge samples (m)
+  double probe = 0;       // largest difference of probe samples (m/s)
+  double energy = 0;  // largest difference of the total energy diagnostic, relative to the potential energy
   long steps_a = 0, steps_b = 0;
 };
 
-double max_series_diff(const std::map<std::string, TimeSeries>& a, const std::map<std::string, TimeSeries>& b) {
+double max_series_diff(const std::map<std::string, TimeSeries>& a,
+                       const std::map<std::string, TimeSeries>& b) {
   double d = 0;
   for (const auto& [name, ta] : a) {
     const TimeSeries& tb = b.at(name);
     EXPECT_EQ(ta.size(), tb.size()) << name;
     for (size_t i = 0; i < std::min(ta.values.size(), tb.values.size()); ++i)
-      if (!(std::isnan(ta.values[i]) && std::isnan(tb.values[i]))) d = std::max(d, std::fabs(ta.values[i] - tb.values[i]));
+      if (!(std::isnan(ta.values[i]) && std::isnan(tb.values[i])))
+        d = std::max(d, std::fabs(ta.values[i] - tb.values[i]));
   }
   return d;
 }
@@ -149,8 +157,10 @@ Difference compare(const Scene& scene, const Factory& make_a, const Factory& mak
   std::vector<double> pa, pb;
   a->particle_pressures(pa);
   b->particle_pressures(pb);
-  for (size_t i = 0; i < std::min(xa.size(), xb.size()); ++i) r.position = std::max(r.position, std::fabs(xa[i] - xb[i]));
-  for (size_t i = 0; i < std::min(pa.size(), pb.size()); ++i) r.pressure = std::max(r.pressure, std::fabs(pa[i] - pb[i]));
+  for (size_t i = 0; i < std::min(xa.size(), xb.size()); ++i)
+    r.position = std::max(r.position, std::fabs(xa[i] - xb[i]));
+  for (size_t i = 0; i < std::min(pa.size(), pb.size()); ++i)
+    r.pressure = std::max(r.pressure, std::fabs(pa[i] - pb[i]));
   const Record &ra = a->record(), &rb = b->record();
   const double weight = a->total_mass() * kG;
   r.floor_load = max_series_diff(ra.loads, rb.loads) / weight;
@@ -162,26 +172,28 @@ Difference compare(const Scene& scene, const Factory& make_a, const Factory& mak
   EXPECT_EQ(ea.size(), eb_total.size());
   for (size_t i = 0; i < std::min(ea.size(), eb_total.size()); ++i)
     r.energy = std::max(r.energy, std::fabs(ea[i] - eb_total[i]) / pe0);
-  std::printf("%s %s %dD: %ld/%ld steps; max differences: position %.3e m, pressure %.3e Pa, front %.3e m, "
-              "floor load %.3e (of weight), gauge %.3e m, probe %.3e m/s, energy %.3e (of potential)\n",
-              scene.name.c_str(), to_string(scene.solver.precision), scene.dimension, r.steps_a, r.steps_b,
-              r.position, r.pressure, r.front, r.floor_load, r.gauge, r.probe, r.energy);
+  std::printf(
+      "%s %s %dD: %ld/%ld steps; max differences: position %.3e m, pressure %.3e Pa, front %.3e m, "
+      "floor load %.3e (of weight), gauge %.3e m, probe %.3e m/s, energy %.3e (of potential)\n",
+      scene.name.c_str(), to_string(scene.solver.precision), scene.dimension, r.steps_a, r.steps_b,
+      r.position, r.pressure, r.front, r.floor_load, r.gauge, r.probe, r.energy);
   return r;
 }
 
 // Round-off bounds. In double a step's P2G sums differ by summation order, ~1e-16 relative, and the runs
 // below (up to ~4000 steps) let that grow at most to ~1e-12 relative in a damped flow; the bounds take 1e-9
-// of the natural scale (dx for positions, rho g H for pressures, the weight for loads): three orders of margin
-// over round-off, six orders below anything a validation test resolves. On a GPU the order also changes from
-// run to run (atomics) and FMA contraction adds the same size of difference: the same bounds times 10.
-// In float the same reasoning with 6e-8 per operation gives 1e-3 of the natural scale, checked on a GPU only.
+// of the natural scale (dx for positions, rho g H for pressures, the weight for loads): three orders of
+// margin over round-off, six orders below anything a validation test resolves. On a GPU the order also
+// changes from run to run (atomics) and FMA contraction adds the same size of difference: the same bounds
+// times 10. In float the same reasoning with 6e-8 per operation gives 1e-3 of the natural scale, checked on a
+// GPU only.
 struct Bounds {
   double position, pressure, front, load, gauge, probe, energy;
 };
 Bounds double_bounds(double dx, double head, double scale = 1) {
   const double p = kRho * kG * head;
-  return {1e-9 * dx * scale, 1e-9 * p * scale, 1e-9 * dx * scale, 1e-9 * scale, 1e-9 * dx * scale, 1e-9 * scale,
-          1e-9 * scale};
+  return {1e-9 * dx * scale, 1e-9 * p * scale, 1e-9 * dx * scale, 1e-9 * scale,
+          1e-9 * dx * scale, 1e-9 * scale,     1e-9 * scale};
 }
 Bounds float_bounds(double dx, double head) {
   const double p = kRho * kG * head;
@@ -314,7 +326,8 @@ TEST(Cuda, RunWritesResult) {
 TEST(CudaBench, ParticleStepsPerSecond) {
   const char* scene_file = std::getenv("FLUME_GPU_BENCH_SCENE");
   const char* steps_text = std::getenv("FLUME_GPU_BENCH_STEPS");
-  if (!scene_file || !steps_text) GTEST_SKIP() << "set FLUME_GPU_BENCH_SCENE and FLUME_GPU_BENCH_STEPS to run";
+  if (!scene_file || !steps_text)
+    GTEST_SKIP() << "set FLUME_GPU_BENCH_SCENE and FLUME_GPU_BENCH_STEPS to run";
   SKIP_WITHOUT_DEVICE();
   const long steps = std::atol(steps_text);
   std::printf("| precision | particles | steps | ms/step | particle-steps/s | grid MB | active blocks |\n");
@@ -331,8 +344,8 @@ TEST(CudaBench, ParticleStepsPerSecond) {
     EXPECT_NE(st, RunStatus::kUnstable) << sim->message();
     const long n = sim->steps() - steps0;
     std::printf("| %s | %zu | %ld | %.3f | %.3e | %.1f | %zu |\n", precision, sim->particle_count(), n,
-                1000 * wall / n, double(n) * double(sim->particle_count()) / wall, sim->grid_bytes() / 1048576.0,
-                sim->active_blocks());
+                1000 * wall / n, double(n) * double(sim->particle_count()) / wall,
+                sim->grid_bytes() / 1048576.0, sim->active_blocks());
   }
 }
 
