@@ -249,22 +249,13 @@ CREATE TABLE IF NOT EXISTS metrics (
   name TEXT NOT NULL,
   value REAL,
   PRIMARY KEY (run, name));
-CREATE TABLE IF NOT EXISTS evaluations (
-  campaign INTEGER NOT NULL REFERENCES campaigns(id),
-  phase TEXT NOT NULL,
-  start INTEGER NOT NULL,
-  seq INTEGER NOT NULL,
-  run INTEGER REFERENCES runs(id),
-  params TEXT NOT NULL,
-  value REAL,
-  terms TEXT,
-  PRIMARY KEY (campaign, phase, start, seq));
 CREATE VIEW IF NOT EXISTS run_results AS
   SELECT c.name AS campaign_name, r.id AS run, r.design_index, r.status, r.message, r.params,
          (SELECT json_group_object(m.name, m.value) FROM metrics m WHERE m.run = r.id) AS metrics,
          r.wall_s, r.steps, r.particles, r.peak_rss_mb, r.attempts, r.started, r.finished, r.host, r.h5_path
   FROM runs r JOIN campaigns c ON c.id = r.campaign;
 )SQL");
+  exec(db_, kEvaluationsTable);
   Stmt meta(db_, "INSERT INTO meta (key, value) VALUES ('schema_version', ?1), ('created_by', 'flume')");
   meta.bind(1, std::to_string(kSchemaVersion)).run();
   exec(db_, "PRAGMA user_version = " + std::to_string(kSchemaVersion));

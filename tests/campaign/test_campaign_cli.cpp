@@ -233,7 +233,7 @@ TEST(CampaignFailures, SegfaultHangUnstableAreRecordedAndOthersComplete) {
 
 // Issue 5, point 4 (first half): mpirun -np 3 gives the same results as the local pool.
 TEST(CampaignMpi, SameResultsAsLocalPool) {
-  if (!have_mpirun()) GTEST_SKIP() << "mpirun not found";
+  if (!have_mpirun()) GTEST_SKIP() << "mpirun not found (scripts/setup installs openmpi-bin; only a hand-made environment lacks it)";
   const fs::path dir = test_dir();
   const fs::path spec = dir / "spec.json";
   write_file(spec, R"({"name": "ishigami-sobol", "model": "ishigami",
@@ -257,7 +257,7 @@ TEST(CampaignMpi, SameResultsAsLocalPool) {
 
 // Issue 5, point 4 (second half): kill one rank mid-campaign; running the job again completes it.
 TEST(CampaignMpi, KillOneRankThenRerunEndsWithEveryRunOkOnce) {
-  if (!have_mpirun()) GTEST_SKIP() << "mpirun not found";
+  if (!have_mpirun()) GTEST_SKIP() << "mpirun not found (scripts/setup installs openmpi-bin; only a hand-made environment lacks it)";
   const fs::path dir = test_dir();
   const fs::path spec = dir / "spec.json", db = dir / "study.db";
   write_file(spec, test_spec("mpi-kill", 16, 0.3));
