@@ -8,6 +8,8 @@
 
 #include "common/errors.h"
 #include "flume_version.h"
+#include "solver/debris_coupling.h"
+#include "solver/debris_metrics.h"
 #include "solver/run_output.h"
 #include "store/h5/run_file.h"
 
@@ -41,6 +43,32 @@ void write_record(h5::RunFile& file, const Scene& scene, const Record& record) {
 }
 
 namespace {
+// /debris/<name>/{solver,resampled}/<field>: the trajectories at the solver's rate and at the accelerometer
+// rate, with the accelerometer force m a (debris_recorder.h).
+void write_debris(h5::RunFile& file, const DebrisRecorder& rec) {
+  auto flat3 = [](const std::vector<std::array<double, 3>>& a) {
+    std::vector<double> v;
+    v.reserve(3 * a.size());
+    for (const auto& x : a) v.insert(v.end(), x.begin(), x.end());
+    return v;
+  };
+  for (int b = 0; b < rec.body_count(); ++b)
+    for (int which = 0; which < 2; ++which) {
+      const DebrisSeries& s = which == 0 ? rec.solver_rate(b) : rec.resampled(b);
+      const std::string g = "/debris/" + rec.name(b) + (which == 0 ? "/solver" : "/resampled");
+      file.write_series(g, "time", s.time);
+      file.write_matrix(g, "position", flat3(s.position), 3);
+      std::vector<double> q;
+      for (const auto& x : s.orientation) q.insert(q.end(), x.begin(), x.end());
+      file.write_matrix(g, "orientation", q, 4);
+      file.write_matrix(g, "velocity", flat3(s.velocity), 3);
+      file.write_matrix(g, "angular_velocity", flat3(s.angular_velocity), 3);
+      file.write_matrix(g, "acceleration", flat3(s.acceleration), 3);
+      file.write_matrix(g, "force", flat3(s.force), 3);
+      file.write_matrix(g, "specific_force_body", flat3(s.specific_force_body), 3);
+    }
+}
+
 void add_snapshot(h5::RunFile& file, const Simulation& sim) {
   std::vector<double> xyz, vel, p;
   sim.particle_positions(xyz);
@@ -91,6 +119,13 @@ RunOutcome run_scene(const Scene& scene, const SimulationOptions& options, const
   out.cost.peak_rss_mb = peak_rss_mb();
   out.metrics = compute_metrics(scene, sim->record());
   write_record(file, scene, sim->record());
+  if (DebrisCoupling* debris = sim->debris()) {
+    debris->finish();
+    write_debris(file, debris->recorder());
+    // Touching a column: within a tenth of a cell or 2 mm, whichever is larger (the grid resolves no finer).
+    for (const auto& [k, v] : debris_metrics(scene, debris->recorder(), std::max(0.002, 0.1 * scene.solver.dx)))
+      out.metrics[k] = v;
+  }
   file.set_attribute("/", "status", status_name(status));
   file.set_attribute("/", "message", out.message);
   file.finalize();

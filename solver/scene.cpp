@@ -403,6 +403,7 @@ void expand_basin(json& root, Basin& B, const std::string& file, int dim) {
       const std::string name = "column_r" + std::to_string(rr + 1) + "c" + std::to_string(c + 1);
       bnd.push_back(box(name, xl, xl + size, yl, yh, B.apron_height_m - 2 * pad, top + 2 * pad));
       B.obstacle_names.push_back(name);
+      B.obstacle_boxes.push_back({Vec3d{xl, yl, B.apron_height_m - 2 * pad}, Vec3d{xl + size, yh, top + 2 * pad}});
       loads.push_back({{"name", "LC_r" + std::to_string(rr + 1) + "c" + std::to_string(c + 1)},
                        {"boundary", name}, {"rate_hz", 1200}});
     }
@@ -443,6 +444,60 @@ void expand_basin(json& root, Basin& B, const std::string& file, int dim) {
   root.erase("basin");
   root.erase("reservoir");
   root.erase("obstacles");
+}
+
+
+// A basin scene's `debris` section may describe the Waseda layout instead of listing bodies: `count` (3|6)
+// containers in `layers` (1|2), `placement` upstream|downstream of the obstacles, the first row's upstream face
+// at `row_x_m`. This writes the bodies it means into debris.bodies (boxes sized `size_m` along x, y, z, 3 side
+// by side `gap_m` apart, centred across the basin, resting on the apron with a 0.5 mm gap as the STAR-CCM+ team
+// placed theirs, section 4.3) and returns the layout for the reports. D1-D3 are the bottom layer (or first row)
+// from low to high y, D4-D6 the top layer (or second row).
+void expand_debris_layout(json& root, Basin& B, DebrisSettings& layout, const std::string& file, int dim) {
+  if (!root.contains("debris")) return;
+  json& d = root["debris"];
+  if (!d.is_object()) throw InputError(file, "debris", std::string("must be an object, got ") + type_name(d));
+  if (d.contains("bodies")) return;  // listed by hand
+  Reader r(d, "debris", file);
+  if (dim != 3) r.fail("", "debris need a 3D scene (the rigid bodies are 3D): use waseda_3d or remove `debris`");
+  if (B.span == "half")
+    r.fail("", "the debris layout is not mirror-symmetric about the centreline: use basin.span = full");
+  layout.count = r.integer("count", 6, 3, 6);
+  if (layout.count != 3 && layout.count != 6) r.fail("count", "must be 3 or 6 (got " + std::to_string(layout.count) + ")");
+  layout.layers = r.integer("layers", layout.count == 6 ? 2 : 1, 1, 2);
+  if (layout.count == 3 && layout.layers != 1) r.fail("layers", "must be 1 when count is 3 (three containers make one layer)");
+  layout.placement = r.choice<std::string>("placement", std::string("upstream"),
+                                           {{"upstream", "upstream"}, {"downstream", "downstream"}});
+  // Downstream: 0.30 m past the last obstacle row's downstream face (the study gives no position; an
+  // assumption, stated in docs/debris.md).
+  const json& os = root.contains("obstacles") ? root.at("obstacles") : json::object();
+  const int rows = B.obstacles_layout == "5x2" ? 2 : B.obstacles_layout == "5x1" ? 1 : 0;
+  const double obstacle_end = os.value("first_row_x_m", 5.11) +
+                              (rows > 0 ? (rows - 1) * os.value("row_spacing_m", 0.45) + os.value("size_m", 0.10) : 0.0);
+  const double default_x = layout.placement == "upstream" ? 4.65 : obstacle_end + 0.30;
+  layout.row_x_m = r.number("row_x_m", default_x, B.quay_x_m, B.length_m);
+  const Vec3d size = r.vec("size_m", 3, Vec3d{0.06, 0.15, 0.06});
+  for (int a = 0; a < 3; ++a)
+    if (!(size[a] > 0)) r.fail("size_m", "edge lengths must be > 0");
+  const double gap = r.number("gap_m", 0.03, 0.0, 1.0);
+  for (const char* k : {"friction", "restitution", "density", "resample_hz", "record_rate_hz"})
+    if (r.has(k)) r.accept(k);
+  r.finish();
+  const int per_layer = 3;
+  const int stacks = layout.count / per_layer / layout.layers;  // rows one behind the other (6 in 1 layer: 2)
+  json bodies = json::array();
+  int k = 0;
+  for (int layer = 0; layer < layout.layers; ++layer)
+    for (int row = 0; row < stacks; ++row)
+      for (int c = 0; c < per_layer; ++c) {
+        const double x = layout.row_x_m + row * 2 * size[0] + 0.5 * size[0];
+        const double y = B.width_m / 2 + (c - 1) * (size[1] + gap);
+        const double z = B.apron_height_m + 0.0005 + layer * (size[2] + 0.0005) + 0.5 * size[2];
+        bodies.push_back({{"name", "D" + std::to_string(++k)}, {"size", {size[0], size[1], size[2]}},
+                          {"position", {x, y, z}}});
+      }
+  for (const char* key : {"count", "layers", "placement", "row_x_m", "size_m", "gap_m"}) d.erase(key);
+  d["bodies"] = bodies;
 }
 
 double ReservoirForcing_hold(const ReservoirForcing& F, double t) {
@@ -620,6 +675,61 @@ Scene parse(const json& root_json, const std::string& file) {
     I.snapshot_rate_hz = inst.number("snapshot_rate_hz", 0.0, 0.0, 1e4);
     inst.finish();
   }
+
+  if (root.has("debris")) {
+    Reader r = root.object("debris");
+    auto& D = sc.debris;
+    D.present = true;
+    if (dim != 3) r.fail("", "debris need a 3D scene (the rigid bodies are 3D)");
+    {
+      Reader f = r.object("friction");
+      D.friction_flume = f.number("flume", D.friction_flume, 0.0, 2.0);
+      D.friction_debris = f.number("debris", D.friction_debris, 0.0, 2.0);
+      f.finish();
+      Reader e = r.object("restitution");
+      D.restitution_flume = e.number("flume", D.restitution_flume, 0.0, 1.0);
+      D.restitution_debris = e.number("debris", D.restitution_debris, 0.0, 1.0);
+      e.finish();
+    }
+    D.density = r.number("density", D.density, 1.0, 1e5);
+    D.resample_hz = r.number("resample_hz", 30.0, 0.0, 1e6, true, false);
+    D.record_rate_hz = r.number("record_rate_hz", 1000.0, 0.0, 1e7);
+    auto list = r.array("bodies");
+    if (list.empty()) r.fail("bodies", "is required: a non-empty array of boxes {name, size, position}");
+    std::set<std::string> names;
+    for (auto& b : list) {
+      DebrisBody body;
+      body.name = b.string("name", "D" + std::to_string(D.bodies.size() + 1));
+      if (!names.insert(body.name).second) b.fail("name", "duplicate debris name '" + body.name + "'");
+      body.size = b.vec("size", 3);
+      for (int a = 0; a < 3; ++a)
+        if (!(body.size[a] > 0)) b.fail("size", "edge lengths must be > 0 (axis " + std::to_string(a) + ")");
+      body.position = b.vec("position", 3);
+      const double yaw = b.number("yaw_deg", 0.0, -360.0, 360.0) * M_PI / 180.0;
+      body.orientation = {std::cos(yaw / 2), 0.0, 0.0, std::sin(yaw / 2)};
+      const double volume = body.size[0] * body.size[1] * body.size[2];
+      body.mass = b.number("mass", D.density * volume, 0.0, 1e6, true, false);
+      // Its bounding box must lie in the domain and clear every solid boundary (a box started inside a wall
+      // would be thrown out of it).
+      const double hx = 0.5 * std::hypot(body.size[0], body.size[1]) ;
+      Vec3d lo{}, hi{};
+      for (int a = 0; a < 3; ++a) {
+        const double h = a < 2 && yaw != 0.0 ? hx : 0.5 * body.size[a];
+        lo[a] = body.position[a] - h;
+        hi[a] = body.position[a] + h;
+        if (lo[a] < sc.domain_lo[a] + 2 * sc.solver.dx || hi[a] > sc.domain_hi[a] - 2 * sc.solver.dx)
+          b.fail("position", "the body must lie inside the domain at least 2 cells from its edge (axis " +
+                                 std::to_string(a) + ": [" + fmt(lo[a]) + ", " + fmt(hi[a]) + "] against [" +
+                                 fmt(sc.domain_lo[a] + 2 * sc.solver.dx) + ", " + fmt(sc.domain_hi[a] - 2 * sc.solver.dx) + "])");
+      }
+      for (const auto& w : sc.boundaries)
+        if (solid_overlaps_box(w.shape, lo, hi, 3, 1e-4))
+          b.fail("position", "the body overlaps solid boundary '" + w.name + "'; place it in free space");
+      b.finish();
+      D.bodies.push_back(body);
+    }
+    r.finish();
+  }
   root.finish();
   return sc;
 }
@@ -649,11 +759,19 @@ Scene parse_scene_text(const std::string& json_text, const std::string& file_lab
     if (dim != 2 && dim != 3) throw InputError(file_label, "dimension", "must be 2 or 3");
     Basin basin = read_basin(root, file_label, dim);
     expand_basin(root, basin, file_label, dim);
+    DebrisSettings layout;
+    expand_debris_layout(root, basin, layout, file_label, dim);
     Scene sc = parse(root, file_label);
     sc.basin = basin;
+    sc.debris.count = layout.count ? layout.count : static_cast<int>(sc.debris.bodies.size());
+    sc.debris.layers = layout.layers;
+    sc.debris.placement = layout.placement;
+    sc.debris.row_x_m = layout.row_x_m;
     return sc;
   }
-  return parse(root, file_label);
+  Scene sc = parse(root, file_label);
+  sc.debris.count = static_cast<int>(sc.debris.bodies.size());
+  return sc;
 }
 
 Scene load_scene(const std::string& file, const std::vector<Override>& overrides) {

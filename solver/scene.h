@@ -102,6 +102,32 @@ struct Basin {
   ReservoirForcing forcing;
   std::string obstacles_layout = "0x0";
   std::vector<std::string> obstacle_names;  // boundaries that are obstacles (columns)
+  std::vector<std::array<Vec3d, 2>> obstacle_boxes;  // their solid boxes (lo, hi), 3D frame
+};
+
+// Rigid debris (issue 4): boxes with 6-DOF dynamics, contact with the flume and each other (Bullet), coupled
+// both ways with the water through the grid (solver/debris_coupling.h). 3D scenes only.
+struct DebrisBody {
+  std::string name;                        // D1, D2, ... (HDF5 /debris/<name>, metrics <name>.*)
+  Vec3d size{};                            // full edge lengths along the body axes, m
+  Vec3d position{};                        // centre of mass, m
+  std::array<double, 4> orientation{1, 0, 0, 0};  // body -> world quaternion (w, x, y, z)
+  double mass = 0.0;                       // kg (from `mass`, or `density` x volume)
+};
+struct DebrisSettings {
+  bool present = false;
+  // Coulomb friction and restitution; the paper's Table 2 ranges (friction 0.15-0.80 flume, 0.05-0.80 debris;
+  // restitution 0.30-0.60 flume, 0.40-0.70 debris). Defaults: the SPH team's Chrono values (section 4.2).
+  double friction_flume = 0.425, friction_debris = 0.2;
+  double restitution_flume = 0.55, restitution_debris = 0.6;
+  double density = 418.5;  // kg/m^3: the Waseda container, 0.226 kg in 0.15 x 0.06 x 0.06 m
+  // How the layout was generated in a basin scene (for reports): count, layers, placement, first row's x.
+  int count = 0, layers = 0;
+  std::string placement;
+  double row_x_m = 0.0;
+  double resample_hz = 30.0;      // the experiment's accelerometer rate
+  double record_rate_hz = 1000.0; // solver-rate trajectory samples kept per second (0: every step)
+  std::vector<DebrisBody> bodies;
 };
 
 struct Scene {
@@ -117,6 +143,7 @@ struct Scene {
   std::vector<Boundary> boundaries;
   Instruments instruments;
   Basin basin;
+  DebrisSettings debris;
 };
 
 // A `--set path=value` override. The value is read as JSON where it parses as JSON, else as a string.

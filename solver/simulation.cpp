@@ -20,6 +20,9 @@ bool cuda_available() {
 
 std::unique_ptr<Simulation> make_simulation(const Scene& scene, const SimulationOptions& options) {
   if (options.backend == Backend::kCuda) {
+    if (scene.debris.present)
+      throw InputError(scene.file, "debris",
+                       "the CUDA backend does not couple debris yet: run this scene with --backend cpu");
 #ifdef FLUME_HAVE_CUDA
     if (!cuda_device_present()) throw InputError("--backend", "cuda", "no CUDA device is present on this machine");
     return make_cuda_simulation(scene, options);

@@ -9,6 +9,8 @@
 
 namespace flume {
 
+class DebrisCoupling;
+
 enum class Backend { kCpu, kCuda };
 
 struct SimulationOptions {
@@ -70,6 +72,9 @@ class Simulation {
   // Sets particle velocities to v(x) = v0 + omega x (x - centre) (3D; in 2D omega is about the out-of-plane
   // axis and only omega[2] is used). For tests and initial conditions.
   virtual void set_rigid_velocity(const double v0[3], const double omega[3], const double centre[3]) = 0;
+  // The debris and their recorded trajectories; null when the scene has none.
+  virtual const DebrisCoupling* debris() const { return nullptr; }
+  virtual DebrisCoupling* debris() { return nullptr; }
 };
 
 // Builds the solver for the scene's dimension and precision. Throws InputError for an unavailable backend.

@@ -1,0 +1,90 @@
+// Two-way coupling of rigid debris (RigidWorld, Bullet contact) with the MPM water, through the grid.
+//
+// Each step, after the grid velocities are updated and the scene's walls applied, every grid node with water
+// mass in or within one cell of a debris box (signed distance <= dx; why one cell: mpm_solver.cpp,
+// coupling_band_) is a moving-wall node of that box: like a wall node,
+// its velocity may not approach the box's surface (the `separate` condition of eq. 2, no friction: the water
+// may leave the box, slide along it, not enter it). The impulse that removes the approach is what the water
+// and the box exchange.
+//
+// The exchange is solved implicitly for the box's velocity. With U = (v, omega) the box's velocity, M its
+// 6x6 mass matrix (m I, world inertia) and G_i = (n_i, r_i x n_i) the Jacobian of node i's normal velocity,
+// the box after the step and its active nodes satisfy
+//     (M + sum_i m_i G_i G_i^T) U' = M U + F_gravity dt + sum_i m_i G_i (n_i . v_i),
+// i.e. a perfectly inelastic normal collision between the box and the water mass on its nodes, momentum
+// conserving by construction. An explicit exchange (the water's impulse computed against the old U and
+// applied afterwards) overshoots when the node water mass exceeds the box's mass, which it does for a 419
+// kg/m^3 container in water (the added-mass instability of partitioned coupling); the implicit one does not.
+// The active set (nodes approaching the box) is iterated to a fixed point (a few sweeps).
+//
+// The water's load F = M (U' - U) / dt - F_gravity (force and torque about the centre) is then handed to
+// RigidWorld, which adds gravity and contact and steps the boxes by dt; the nodes take the box's normal
+// velocity at U'. Buoyancy and drag come out of the water's pressure on the nodes, not out of a formula.
+//
+// Grid nodes alone cannot keep a moving box's face from overtaking the water particles just ahead of it (a
+// particle's velocity interpolates constrained and free nodes, so it lags the face): after G2P, a particle
+// inside a box is moved back to its surface and its approach velocity removed, as a wall would; the momentum
+// it loses is given to the box with the next exchange, so the pair still conserves momentum.
+//
+// Deterministic: nodes are summed in grid order whatever the thread count. CPU only for now.
+#pragma once
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "solver/rigid/debris_recorder.h"
+#include "solver/rigid/rigid_world.h"
+#include "solver/scene.h"
+
+namespace flume {
+
+// A grid node inside a debris box, as the grid update found it.
+struct CouplingNode {
+  uint64_t id = 0;  // grid node's storage index (the sort key)
+  int body = -1;
+  double x[3] = {0, 0, 0};  // node position
+  double n[3] = {0, 0, 0};  // box's outward normal at the node (its nearest face)
+  double m = 0;             // water mass on the node
+  double v[3] = {0, 0, 0};  // node velocity before the exchange; after exchange(): the projected velocity
+};
+
+class DebrisCoupling {
+ public:
+  explicit DebrisCoupling(const Scene& scene);
+
+  int body_count() const { return world_.body_count(); }
+  const RigidWorld& world() const { return world_; }
+  const DebrisRecorder& recorder() const { return *recorder_; }
+  const std::vector<RigidBoxView>& views() const { return world_.box_views(); }
+  double bounding_radius(int body) const { return radius_[body]; }
+
+  // The box holding point x, the deepest when several do (signed distance <= tol), or -1. Writes its outward
+  // normal at x.
+  int locate(const double x[3], double tol, double n[3]) const;
+
+  // Solves the exchange for `nodes` (sorted by id), sets their projected velocities, applies the water's loads
+  // and steps the boxes by dt; records the trajectories.
+  void exchange(std::vector<CouplingNode>& nodes, double dt);
+
+  // Water particles found inside a box after G2P are put back on its surface, their velocity's approach
+  // removed (debris_coupling.cpp); the momentum they lose goes to the box in the next exchange. `impulse` is
+  // the box's share (N s, world frame) and `moment` its moment about the origin (sum of x cross impulse).
+  void add_particle_impulse(int body, const double impulse[3], const double moment[3]);
+
+  // Kinetic and potential energy of the boxes (J): for the solver's energy audit.
+  double energy() const;
+  // The water's force on each body over the last step (N, world frame): for instruments and tests.
+  const std::vector<Eigen::Vector3d>& water_force() const { return water_force_; }
+
+  void finish() { recorder_->finish(); }
+
+ private:
+  RigidWorld world_;
+  std::unique_ptr<DebrisRecorder> recorder_;
+  std::vector<double> radius_;
+  std::vector<Eigen::Vector3d> water_force_;
+  std::vector<Eigen::Matrix<double, 6, 1>> pending_;  // particle impulses for the next exchange (force, torque)
+  Eigen::Vector3d gravity_;
+};
+
+}  // namespace flume

@@ -1,0 +1,272 @@
+// Debris coupled to the water (issue 4): buoyancy and draft out of the water's pressure, momentum exchanged
+// exactly, thread-count independence, the Waseda layout and its input errors, and the debris metrics.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+#include "common/errors.h"
+#include "solver/debris_coupling.h"
+#include "solver/debris_metrics.h"
+#include "solver/scene.h"
+#include "solver/simulation.h"
+
+namespace flume {
+namespace {
+
+constexpr double kG = 9.80665;
+
+// A square tank (slip walls at 0 and L, floor at 0) filled to `depth`, with one cube of edge H, density rho_b.
+std::string tank_scene(double L, double depth, double H, double rho_b, double z_centre, double dx, double end_time,
+                       double psi = 0.0) {
+  const double pad = 3 * dx;
+  char buf[4096];
+  std::snprintf(buf, sizeof buf, R"({
+    "name": "tank", "dimension": 3,
+    "domain": {"lo": [%g, %g, %g], "hi": [%g, %g, %g], "walls": "slip"},
+    "solver": {"dx": %g, "ppc": 8, "cfl": 0.4, "end_time": %g},
+    "fluid": {"bulk_modulus": 5e4, "jbar_psi": %g},
+    "boundaries": [
+      {"name": "floor", "type": "half_space", "point": [0, 0, 0], "normal": [0, 0, 1], "condition": "slip"},
+      {"name": "x0", "type": "half_space", "point": [0, 0, 0], "normal": [1, 0, 0], "condition": "slip"},
+      {"name": "x1", "type": "half_space", "point": [%g, 0, 0], "normal": [-1, 0, 0], "condition": "slip"},
+      {"name": "y0", "type": "half_space", "point": [0, 0, 0], "normal": [0, 1, 0], "condition": "slip"},
+      {"name": "y1", "type": "half_space", "point": [0, %g, 0], "normal": [0, -1, 0], "condition": "slip"}],
+    "water": [{"lo": [0, 0, 0], "hi": [%g, %g, %g]}],
+    "debris": {"density": %g, "bodies": [{"name": "D1", "size": [%g, %g, %g], "position": [%g, %g, %g]}]},
+    "instruments": {"diagnostics_rate_hz": 50}
+  })",
+                -pad, -pad, -pad, L + pad, L + pad, 2 * depth + pad, dx, end_time, psi, L, L, L, L, depth, rho_b, H, H,
+                H, L / 2, L / 2, z_centre);
+  return buf;
+}
+
+// Issue 4, test 3. A cube of 419 kg/m^3 (the paper's MPM debris density) placed with its bottom 4 cm under a
+// 0.15 m deep still tank (no water seeded inside it) is released. Archimedes: it floats at a draft of
+// rho_b / rho_w H = 0.419 H. The draft is measured without a gauge: the water keeps its seeded volume V (it
+// starts hydrostatic, so its compression does not change), so with the box's bottom at z_b and draft d the
+// level is h = z_b + d = (V + A_b d) / A_t, i.e. d = (V / A_t - z_b) / (1 - A_b / A_t).
+// Tolerance: one grid cell (the issue's), the resolution of the grid's moving-wall boundary. Drift: the
+// box's mean speed over the last 0.5 s below 1 mm/s. J-bar off (psi 0): with psi 0.9 a still 3D tank loses
+// level over seconds (the particles compact while the grid-averaged J does not see it; issue 2), and the box
+// would follow it down.
+TEST(Floating, SettlesAtArchimedesDraftWithinOneCell) {
+  const double L = 0.25, depth = 0.15, H = 0.10, rho_b = 419.0, dx = 0.01;
+  const double z0 = depth - 0.04 + H / 2;  // bottom 4 cm under the surface
+  const Scene scene = parse_scene_text(tank_scene(L, depth, H, rho_b, z0, dx, 1.5), "floating");
+  auto sim = make_simulation(scene, {});
+  const double A_t = L * L, A_b = H * H;
+  // Water volume: the tank to `depth` less the cube's part below the surface, where no water was seeded.
+  const double V = A_t * depth - A_b * (depth - (z0 - H / 2));
+  double z_at_1s = 0;
+  while (sim->step() == RunStatus::kRunning)
+    if (z_at_1s == 0 && sim->time() >= 1.0) z_at_1s = sim->debris()->world().state(0).position.z();
+  ASSERT_EQ(sim->step(), RunStatus::kOk) << sim->message();
+  const auto s = sim->debris()->world().state(0);
+  const double z_b = s.position.z() - H / 2;
+  const double draft = (V / A_t - z_b) / (1 - A_b / A_t);
+  const double expected = rho_b / 1000.0 * H;
+  std::printf("draft %.4f m against %.4f m (error %.2f cells); vertical drift %.3f mm/s; horizontal (%.2g, %.2g) m\n",
+              draft, expected, (draft - expected) / dx, (s.position.z() - z_at_1s) / 0.5 * 1e3,
+              s.position.x() - L / 2, s.position.y() - L / 2);
+  EXPECT_NEAR(draft, expected, dx);
+  EXPECT_LT(std::fabs(s.position.z() - z_at_1s) / 0.5, 1e-3);
+  EXPECT_LT(s.velocity.norm(), 1e-2);  // at rest, not passing through equilibrium
+  EXPECT_NEAR(s.position.x(), L / 2, 1e-3);
+  EXPECT_NEAR(s.position.y(), L / 2, 1e-3);
+}
+
+// A cube twice as dense as water sinks to the floor and stays there: the water's load does not exceed the
+// buoyancy (rho_w / rho_b = 1/2 of its weight).
+TEST(Floating, DenseBoxSinksToTheFloor) {
+  const double L = 0.25, depth = 0.15, H = 0.10, dx = 0.0125;
+  const Scene scene = parse_scene_text(tank_scene(L, depth, H, 2000.0, depth - 0.04 + H / 2, dx, 1.2), "sinking");
+  auto sim = make_simulation(scene, {});
+  while (sim->step() == RunStatus::kRunning) {
+  }
+  ASSERT_EQ(sim->step(), RunStatus::kOk) << sim->message();
+  const auto s = sim->debris()->world().state(0);
+  std::printf("bottom at %.5f m, speed %.2g m/s\n", s.position.z() - H / 2, s.velocity.norm());
+  EXPECT_NEAR(s.position.z() - H / 2, 0.0, 1e-3);  // on the floor (contact resolves to micrometres)
+  EXPECT_LT(s.velocity.norm(), 1e-2);
+}
+
+// Without gravity or walls in reach, the water and a box moving through it exchange momentum only with each
+// other: the total is conserved to round-off (the exchange is a momentum-conserving inelastic collision and
+// the pushed-out particles' loss goes to the box).
+TEST(Exchange, ConservesTotalMomentum) {
+  std::string text = R"({
+    "name": "exchange", "dimension": 3,
+    "domain": {"lo": [0, 0, 0], "hi": [0.4, 0.4, 0.4]},
+    "solver": {"dx": 0.02, "ppc": 8, "end_time": 0.05, "gravity": [0, 0, 0]},
+    "fluid": {"bulk_modulus": 1e5},
+    "water": [{"lo": [0.06, 0.06, 0.06], "hi": [0.34, 0.34, 0.34], "hydrostatic": false}],
+    "debris": {"bodies": [{"name": "D1", "size": [0.1, 0.06, 0.08], "position": [0.2, 0.2, 0.2], "yaw_deg": 20,
+                           "mass": 0.5}]}
+  })";
+  const Scene scene = parse_scene_text(text, "exchange");
+  auto sim = make_simulation(scene, {});
+  // Give the box a push by hand: start it at 0.3 m/s through still water (the world's own state).
+  auto* debris = sim->debris();
+  ASSERT_NE(debris, nullptr);
+  const double mass = debris->world().mass(0);
+  const Eigen::Vector3d v0(0.3, -0.1, 0.2);
+  // An impulse applied as a load over the first step (the box is a RigidWorld body).
+  const_cast<RigidWorld&>(debris->world()).apply_external(0, mass * v0 / 1e-7, Eigen::Vector3d::Zero());
+  const_cast<RigidWorld&>(debris->world()).step(1e-7);
+  double L0[3], A0[3];
+  sim->momentum(L0, A0);
+  const Eigen::Vector3d P0 = Eigen::Vector3d(L0[0], L0[1], L0[2]) + mass * debris->world().state(0).velocity;
+  while (sim->step() == RunStatus::kRunning) {
+  }
+  double L1[3], A1[3];
+  sim->momentum(L1, A1);
+  const auto s = debris->world().state(0);
+  const Eigen::Vector3d P1 = Eigen::Vector3d(L1[0], L1[1], L1[2]) + mass * s.velocity;
+  std::printf("box speed %.4f -> %.4f m/s; total momentum change %.3g of %.3g N s\n", v0.norm(), s.velocity.norm(),
+              (P1 - P0).norm(), P0.norm());
+  EXPECT_LT(s.velocity.norm(), 0.9 * v0.norm());  // the water slowed it: momentum went somewhere
+  EXPECT_LT((P1 - P0).norm(), 1e-10 * P0.norm() + 1e-12);
+}
+
+// The debris trajectories do not depend on the number of threads (the exchange sums nodes in grid order).
+TEST(Exchange, BitwiseIndependentOfThreadCount) {
+  const Scene scene = parse_scene_text(tank_scene(0.2, 0.1, 0.08, 600.0, 0.1, 0.02, 0.03), "threads");
+  Eigen::Vector3d p[2], w[2];
+  for (int k = 0; k < 2; ++k) {
+    SimulationOptions o;
+    o.threads = k + 1;
+    auto sim = make_simulation(scene, o);
+    while (sim->step() == RunStatus::kRunning) {
+    }
+    p[k] = sim->debris()->world().state(0).position;
+    w[k] = sim->debris()->world().state(0).angular_velocity;
+  }
+  EXPECT_EQ(p[0], p[1]);
+  EXPECT_EQ(w[0], w[1]);
+}
+
+// --- the Waseda layout -------------------------------------------------------------------------------------
+
+std::string waseda_3d(const std::string& debris) {
+  return R"({"name": "w", "dimension": 3, "basin": {}, "obstacles": {"layout": "5x2"},
+             "solver": {"dx": 0.04, "end_time": 1.0}, "debris": )" +
+         debris + "}";
+}
+
+TEST(Layout, SixUpstreamInTwoLayers) {
+  const Scene s = parse_scene_text(waseda_3d(R"({"count": 6, "layers": 2})"), "w");
+  ASSERT_EQ(s.debris.bodies.size(), 6u);
+  EXPECT_EQ(s.debris.count, 6);
+  EXPECT_EQ(s.debris.layers, 2);
+  EXPECT_EQ(s.debris.placement, "upstream");
+  // D1-D3 the bottom layer from low y, 0.03 m apart, centred across; first row's upstream face at 4.65 m.
+  const auto& d1 = s.debris.bodies[0];
+  EXPECT_NEAR(d1.position[0], 4.65 + 0.03, 1e-12);
+  EXPECT_NEAR(d1.position[1], 2.0 - 0.18, 1e-12);
+  EXPECT_NEAR(d1.position[2], 0.255 + 0.0005 + 0.03, 1e-12);
+  EXPECT_NEAR(s.debris.bodies[4].position[2], 0.255 + 0.001 + 0.09, 1e-12);  // D5 above D2
+  EXPECT_NEAR(d1.mass, 418.5 * 0.06 * 0.15 * 0.06, 1e-12);                   // 0.226 kg
+  EXPECT_EQ(s.debris.bodies[5].name, "D6");
+}
+
+TEST(Layout, OverridesReachTheContactCoefficients) {
+  const Scene s = parse_scene_text(waseda_3d(R"({"count": 3})"), "w",
+                                   {parse_override("debris.friction.flume=0.8"),
+                                    parse_override("debris.restitution.debris=0.4"),
+                                    parse_override("debris.density=300"), parse_override("debris.placement=downstream")});
+  EXPECT_EQ(s.debris.bodies.size(), 3u);
+  EXPECT_DOUBLE_EQ(s.debris.friction_flume, 0.8);
+  EXPECT_DOUBLE_EQ(s.debris.restitution_debris, 0.4);
+  EXPECT_NEAR(s.debris.bodies[0].mass, 300 * 0.06 * 0.15 * 0.06, 1e-12);
+  EXPECT_GT(s.debris.bodies[0].position[0], 5.66);  // past the second row of columns
+}
+
+void expect_error(const std::string& text, const std::string& field, const std::vector<Override>& o = {}) {
+  try {
+    parse_scene_text(text, "bad.json", o);
+    ADD_FAILURE() << "accepted; expected an error on " << field;
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("bad.json"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Layout, BadInputNamesTheField) {
+  expect_error(waseda_3d(R"({"count": 3, "layers": 2})"), "debris.layers");
+  expect_error(waseda_3d(R"({"count": 4})"), "debris.count");
+  expect_error(waseda_3d(R"({"placement": "sideways"})"), "debris.placement");
+  expect_error(waseda_3d(R"({"count": 6})"), "debris.friction.flume", {parse_override("debris.friction.flume=-1")});
+  expect_error(waseda_3d(R"({"count": 6})"), "debris.restitution.debris",
+               {parse_override("debris.restitution.debris=1.5")});
+  expect_error(waseda_3d(R"({"count": 6, "colour": "red"})"), "debris.colour");
+  // A container placed inside the first row of columns.
+  expect_error(waseda_3d(R"({"count": 3, "row_x_m": 5.10})"), "debris.bodies.1.position");
+  // 2D and half-width scenes cannot hold the layout.
+  expect_error(R"({"name": "w", "dimension": 2, "basin": {}, "solver": {"dx": 0.04, "end_time": 1},
+                   "debris": {"count": 3}})",
+               "debris");
+  expect_error(R"({"name": "w", "dimension": 3, "basin": {"span": "half"}, "solver": {"dx": 0.04, "end_time": 1},
+                   "debris": {"count": 3}})",
+               "debris");
+}
+
+// --- metrics ---------------------------------------------------------------------------------------------
+
+// A box launched across a dry floor slides to rest under Coulomb friction: its path is straight, its stopping
+// distance v0^2 / (2 mu g) (issue 4 test 1 checks the deceleration to 2%). The metrics must read that path:
+// longitudinal and lateral displacement, and the spreading angle atan2(vy, vx); ending against a column
+// counts as dammed.
+TEST(Metrics, ReadASlideToRest) {
+  Scene scene;
+  scene.dimension = 3;
+  scene.solver.gravity = {0, 0, -kG};
+  scene.debris.present = true;
+  scene.debris.friction_flume = 0.5;
+  DebrisBody body;
+  body.name = "D1";
+  body.size = {0.06, 0.15, 0.06};
+  body.mass = 0.226;
+  body.position = {1.0, 1.0, 0.03};
+  scene.debris.bodies = {body};
+  scene.basin.obstacle_boxes.push_back({Vec3d{3.0, 0.0, 0.0}, Vec3d{3.1, 0.1, 1.0}});  // far away: not dammed
+  RigidWorld world(ContactCoefficients{0.5, 0.2, 0.0, 0.0}, Eigen::Vector3d(0, 0, -kG));
+  world.add_static_half_space(Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitZ());
+  RigidBoxSpec spec;
+  spec.name = "D1";
+  spec.size = Eigen::Vector3d(0.06, 0.15, 0.06);
+  spec.mass = 0.226;
+  spec.position = Eigen::Vector3d(1.0, 1.0, 0.03);
+  spec.velocity = Eigen::Vector3d(1.2, 0.5, 0.0);
+  world.add_box(spec);
+  DebrisRecorder rec(world, 30.0, 0.0);
+  rec.record();
+  for (int i = 0; i < 8000; ++i) {
+    world.step(1e-4);
+    rec.record();
+  }
+  rec.finish();
+  const auto m = debris_metrics(scene, rec, 0.002);
+  const double v2 = 1.2 * 1.2 + 0.5 * 0.5, stop = v2 / (2 * 0.5 * kG);
+  const double dx_expected = stop * 1.2 / std::sqrt(v2), dy_expected = stop * 0.5 / std::sqrt(v2);
+  std::printf("slide: longitudinal %.4f (%.4f), lateral %.4f (%.4f), angle %.2f deg\n", m.at("D1.longitudinal_rest_m"),
+              dx_expected, m.at("D1.lateral_rest_m"), dy_expected, m.at("D1.spreading_rest_deg"));
+  EXPECT_NEAR(m.at("D1.longitudinal_rest_m"), dx_expected, 0.02 * dx_expected);
+  EXPECT_NEAR(m.at("D1.lateral_rest_m"), dy_expected, 0.02 * dy_expected);
+  EXPECT_NEAR(m.at("D1.spreading_rest_deg"), std::atan2(0.5, 1.2) * 180 / M_PI, 0.5);
+  EXPECT_NEAR(m.at("D1.longitudinal_max_m"), m.at("D1.longitudinal_rest_m"), 1e-6);  // never came back
+  EXPECT_NEAR(m.at("D1.initial_x_m"), 1.0, 1e-12);
+  EXPECT_EQ(m.at("D1.dammed"), 0.0);
+  EXPECT_LT(m.at("D1.final_speed_m_s"), 1e-3);
+  // Peak accelerometer force: the friction force mu m g while it slides (and no impact).
+  EXPECT_NEAR(m.at("D1.accel_peak_force_30hz_n"), 0.5 * 0.226 * kG, 0.05 * 0.5 * 0.226 * kG);
+  EXPECT_EQ(m.at("debris.mobilised_count"), 1.0);
+
+  // The same slide ending against a column placed across its path.
+  const double xr = 1.0 + dx_expected, yr = 1.0 + dy_expected;
+  scene.basin.obstacle_boxes = {{Vec3d{xr + 0.03 + 0.001, yr - 0.2, 0.0}, Vec3d{xr + 0.2, yr + 0.2, 1.0}}};
+  EXPECT_EQ(debris_metrics(scene, rec, 0.002).at("D1.dammed"), 1.0);
+}
+
+}  // namespace
+}  // namespace flume
