@@ -60,7 +60,7 @@ class MpmSolver final : public Simulation {
   static constexpr int kNodes = mpm::Pow<D>::of(kBlock);
   static constexpr int kTileNodes = mpm::Pow<D>::of(kTile);
   static constexpr int kNbr = mpm::Pow<D>::of(3);
-  static constexpr int kChannels = D + 2;  // mass, momentum (D), mass-weighted strain J - 1
+  static constexpr int kChannels = D + 3;  // mass, momentum (D), mass-weighted strain J - 1, particle volume
 
  public:
   MpmSolver(const Scene& scene, const SimulationOptions& options)
@@ -77,6 +77,7 @@ class MpmSolver final : public Simulation {
     gamma_ = T(f.gamma);
     mu_ = T(f.viscosity);
     psi_ = T(f.jbar_psi);
+    fill_tolerance_ = T(mpm::kFillTolerance);
     for (int d = 0; d < D; ++d) strain_slope_[d] = T(-f.density * scene.solver.gravity[d] / f.bulk_modulus);
     c_ = mpm::sound_speed(f.bulk_modulus, f.density);
     if (scene.debris.present) {
@@ -152,7 +153,7 @@ class MpmSolver final : public Simulation {
     for (size_t i = 0; i < n_; ++i) p[i] = mpm::tait_pressure(double(e_[i]), double(K_), double(gamma_));
   }
   size_t grid_bytes() const override {
-    size_t b = (gm_.capacity() + ge_.capacity()) * sizeof(T) + tiles_.capacity() * sizeof(T);
+    size_t b = (gm_.capacity() + ge_.capacity() + gfill_.capacity()) * sizeof(T) + tiles_.capacity() * sizeof(T);
     for (int d = 0; d < D; ++d) b += gv_[d].capacity() * sizeof(T);
     b += (gkeys_.capacity() + pkeys_.capacity()) * sizeof(uint64_t);
     b += (p_nbr_.capacity() + g_nbr_.capacity() + g_bnd_.capacity()) * sizeof(int32_t);
@@ -443,6 +444,7 @@ class MpmSolver final : public Simulation {
     const size_t nodes = gkeys_.size() * kNodes;
     gm_.resize(nodes);
     ge_.resize(nodes);
+    gfill_.resize(nodes);
     gwall_.resize(nodes);
     for (int d = 0; d < D; ++d) gv_[d].resize(nodes);
     tiles_.resize(pkeys_.size() * kChannels * kTileNodes);
@@ -550,6 +552,7 @@ class MpmSolver final : public Simulation {
         T xp[D];
         for (int d = 0; d < D; ++d) xp[d] = x_[d][i];
         const T mJ = m * (e - mpm::hydrostatic_strain<D>(xp, strain_slope_));
+        const T vol = T(v0_) * (T(1) + e);  // the particle's current volume, for the fill of its nodes
         if constexpr (D == 2) {
           for (int i0 = 0; i0 < 3; ++i0)
             for (int i1 = 0; i1 < 3; ++i1) {
@@ -560,6 +563,7 @@ class MpmSolver final : public Simulation {
               tile[kTileNodes + node] += wt * (mom0[0] + A[0] * o0 + A[1] * o1);
               tile[2 * kTileNodes + node] += wt * (mom0[1] + A[2] * o0 + A[3] * o1);
               tile[3 * kTileNodes + node] += wt * mJ;
+              tile[4 * kTileNodes + node] += wt * vol;
             }
         } else {
           for (int i0 = 0; i0 < 3; ++i0)
@@ -580,6 +584,7 @@ class MpmSolver final : public Simulation {
                 tile[2 * kTileNodes + node] += wt * (m1 + A[5] * o2);
                 tile[3 * kTileNodes + node] += wt * (m2 + A[8] * o2);
                 tile[4 * kTileNodes + node] += wt * mJ;
+                tile[5 * kTileNodes + node] += wt * vol;
               }
             }
         }
@@ -590,6 +595,7 @@ class MpmSolver final : public Simulation {
   // Gathers the tiles into the grid blocks, then turns momentum into velocity, adds gravity and applies the
   // boundary conditions. Load cells sum the impulse the boundary gives the water at its nodes.
   void grid_update(T dt) {
+    const T inv_cell_volume = T(1) / T(std::pow(dx_, D));
     const long ngb = static_cast<long>(gkeys_.size());
     const int nthreads = omp_get_max_threads();
     std::vector<double> impulse(static_cast<size_t>(nthreads) * walls_.size() * D, 0.0);
@@ -659,6 +665,7 @@ class MpmSolver final : public Simulation {
           if (m <= T(0)) {
             gm_[base + k] = T(0);
             ge_[base + k] = T(0);
+            gfill_[base + k] = T(0);
             gwall_[base + k] = 0;
             for (int d = 0; d < D; ++d) gv_[d][base + k] = T(0);
             continue;
@@ -711,6 +718,7 @@ class MpmSolver final : public Simulation {
           }
           gm_[base + k] = m;
           ge_[base + k] = acc[1 + D][k] / m;
+          gfill_[base + k] = acc[2 + D][k] * inv_cell_volume;
           gwall_[base + k] = on_wall;
           for (int d = 0; d < D; ++d) gv_[d][base + k] = v[d];
         }
@@ -792,6 +800,7 @@ class MpmSolver final : public Simulation {
   void g2p(T dt) {
     const T dx = T(dx_);
     const T cscale = T(4) * inv_dx_ * inv_dx_;
+    const T fill_rate = T(mpm::fill_rate(double(dt), c_, dx_));
     const long nblocks = static_cast<long>(pkeys_.size());
     double vmax2 = 0, ke = 0, pe = 0, el = 0;
     long bad = std::numeric_limits<long>::max();
@@ -808,7 +817,7 @@ class MpmSolver final : public Simulation {
     for (long p = 0; p < nblocks; ++p) {
       const bool near_debris = debris_ && block_near_debris(pkeys_[p], 2 * dx_);
       // Gather the grid velocities and J of the tile around this block.
-      T tv[D][kTileNodes], tJ[kTileNodes];
+      T tv[D][kTileNodes], tJ[kTileNodes], tF[kTileNodes];
       uint8_t tW[kTileNodes];
       int blk[D], origin[D];
       unpack_key<D>(pkeys_[p], blk);
@@ -828,6 +837,7 @@ class MpmSolver final : public Simulation {
         const size_t idx = static_cast<size_t>(g) * kNodes + local;
         for (int d = 0; d < D; ++d) tv[d][a] = gv_[d][idx];
         tJ[a] = ge_[idx];
+        tF[a] = gfill_[idx];
         tW[a] = gwall_[idx];
       }
       for (uint32_t i = pstart_[p]; i < pstart_[p + 1]; ++i) {
@@ -838,7 +848,7 @@ class MpmSolver final : public Simulation {
           rel[d] = mpm::stencil_base(xg, f[d]) - origin[d];
           mpm::bspline_weights(f[d], w[d]);
         }
-        T vn[D] = {}, Cn[D * D] = {}, Jg = 0;
+        T vn[D] = {}, Cn[D * D] = {}, Jg = 0, Fg = 0;
         T wsum = 0;
         if constexpr (D == 2) {
           for (int i0 = 0; i0 < 3; ++i0)
@@ -855,6 +865,7 @@ class MpmSolver final : public Simulation {
               Cn[3] += u1 * d1;
               const T wj = tW[a] ? T(0) : wt;
               Jg += wj * tJ[a];
+              Fg += wj * tF[a];
               wsum += wj;
             }
         } else {
@@ -882,6 +893,7 @@ class MpmSolver final : public Simulation {
                 Cn[8] += u2 * d2;
                 const T wj = tW[a] ? T(0) : wt;
                 Jg += wj * tJ[a];
+                Fg += wj * tF[a];
                 wsum += wj;
               }
             }
@@ -895,7 +907,8 @@ class MpmSolver final : public Simulation {
         // renormalised; a particle with no free node in reach keeps its own J (psi = 0).
         const bool have_grid = wsum > T(1e-3);
         const T e_grid = (have_grid ? Jg / wsum : T(0)) + mpm::hydrostatic_strain<D>(xp, strain_slope_);
-        const T e = mpm::jbar_update(e_[i], e_grid, mpm::volume_change<D>(Cn, dt), have_grid ? psi_ : T(0));
+        T e = mpm::jbar_update(e_[i], e_grid, mpm::volume_change<D>(Cn, dt), have_grid ? psi_ : T(0));
+        if (have_grid) e = mpm::fill_correction(e, Fg / wsum, fill_rate, fill_tolerance_);
         e_[i] = e;
         double v2 = 0, gx = 0;
         bool finite = std::isfinite(double(e)) && e > T(-1);
@@ -996,6 +1009,7 @@ class MpmSolver final : public Simulation {
   double grid_lo_[D] = {};
   T gravity_[D] = {};
   T K_ = 0, gamma_ = 0, mu_ = 0, psi_ = 0;
+  T fill_tolerance_ = 0;  // mpm::fill_correction
   T strain_slope_[D] = {};  // s of mpm::hydrostatic_strain
   double c_ = 0;
   double spacing_ = 0, v0_ = 0, mp_ = 0, mass_ = 0;
@@ -1007,7 +1021,7 @@ class MpmSolver final : public Simulation {
   std::vector<int32_t> p_nbr_, g_nbr_;
   std::vector<uint32_t> g_bnd_start_;
   std::vector<int32_t> g_bnd_;
-  std::vector<T> gm_, gv_[D], ge_, tiles_;
+  std::vector<T> gm_, gv_[D], ge_, gfill_, tiles_;  // gfill: particle volume per cell volume at a node
   std::vector<uint8_t> gwall_;  // 1 where a wall set the node's velocity
   std::vector<Wall> walls_;
   mpm::Bc domain_bc_ = mpm::Bc::kSeparate;

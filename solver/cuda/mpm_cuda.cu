@@ -107,7 +107,7 @@ template <int D, typename T>
 struct View {
   static constexpr int kNodes = mpm::Pow<D>::of(kBlock);
   static constexpr int kNbr = mpm::Pow<D>::of(3);
-  static constexpr int kChannels = D + 2;  // mass, momentum (D), mass-weighted strain J - 1
+  static constexpr int kChannels = D + 3;  // mass, momentum (D), mass-weighted strain J - 1, particle volume
 
   // particles
   T* x[D];
@@ -123,7 +123,7 @@ struct View {
   uint8_t* gwall;
   size_t nodes;
   // constants
-  T dx, inv_dx, mp, v0, K, gamma, mu, psi;
+  T dx, inv_dx, mp, v0, K, gamma, mu, psi, fill_tol, inv_cell_volume;
   T grid_lo[D], gravity[D], strain_slope[D];
   double dx_d, grid_lo_d[D], domain_lo[D], domain_hi[D];
   const Wall<D, T>* walls;
@@ -209,6 +209,7 @@ struct P2G {
       xp[a] = s.x[a][i];
     }
     const T mJ = m * (e - mpm::hydrostatic_strain<D>(xp, s.strain_slope));
+    const T vol = s.v0 * (T(1) + e);
     constexpr int kStencil = mpm::Pow<D>::of(3);
     for (int q = 0; q < kStencil; ++q) {
       int off[D], node[D];
@@ -224,6 +225,7 @@ struct P2G {
         atomic_add(&s.grid[(1 + a) * s.nodes + idx], wt * mom);
       }
       atomic_add(&s.grid[(1 + D) * s.nodes + idx], wt * mJ);
+      atomic_add(&s.grid[(2 + D) * s.nodes + idx], wt * vol);
     }
   }
 };
@@ -281,6 +283,7 @@ struct GridUpdate {
       on_wall = 1;
     }
     s.grid[(1 + D) * s.nodes + idx] /= m;
+    s.grid[(2 + D) * s.nodes + idx] *= s.inv_cell_volume;  // the node's fill (mpm::fill_correction)
     s.gwall[idx] = on_wall;
     for (int d = 0; d < D; ++d) s.grid[(1 + d) * s.nodes + idx] = v[d];
   }
@@ -292,6 +295,7 @@ template <int D, typename T>
 struct G2P {
   View<D, T> s;
   T dt;
+  T fill_rate;
   FLUME_HD void operator()(size_t i) const {
     const T dx = s.dx;
     const T cscale = T(4) * s.inv_dx * s.inv_dx;
@@ -304,7 +308,7 @@ struct G2P {
       base[d] = mpm::stencil_base(xg, f[d]);
       mpm::bspline_weights(f[d], w[d]);
     }
-    T vn[D] = {}, Cn[D * D] = {}, Jg = 0, wsum = 0;
+    T vn[D] = {}, Cn[D * D] = {}, Jg = 0, Fg = 0, wsum = 0;
     constexpr int kStencil = mpm::Pow<D>::of(3);
     for (int q = 0; q < kStencil; ++q) {
       int off[D], node[D];
@@ -326,6 +330,7 @@ struct G2P {
         for (int b = 0; b < D; ++b) Cn[a * D + b] += u[a] * dist[b];
       const T wj = s.gwall[idx] ? T(0) : wt;
       Jg += wj * s.grid[(1 + D) * s.nodes + idx];
+      Fg += wj * s.grid[(2 + D) * s.nodes + idx];
       wsum += wj;
     }
     for (int k = 0; k < D * D; ++k) Cn[k] *= cscale;
@@ -333,7 +338,9 @@ struct G2P {
     for (int d = 0; d < D; ++d) xp[d] = s.x[d][i];
     const bool have_grid = wsum > T(1e-3);
     const T e_grid = (have_grid ? Jg / wsum : T(0)) + mpm::hydrostatic_strain<D>(xp, s.strain_slope);
-    s.e[i] = mpm::jbar_update(s.e[i], e_grid, mpm::volume_change<D>(Cn, dt), have_grid ? s.psi : T(0));
+    T e = mpm::jbar_update(s.e[i], e_grid, mpm::volume_change<D>(Cn, dt), have_grid ? s.psi : T(0));
+    if (have_grid) e = mpm::fill_correction(e, Fg / wsum, fill_rate, s.fill_tol);
+    s.e[i] = e;
     for (int d = 0; d < D; ++d) {
       s.v[d][i] = vn[d];
       s.x[d][i] = xp[d] + dt * vn[d];
@@ -469,7 +476,7 @@ class MpmCuda final : public Simulation {
     thr::for_each(thr::device, first, first + n_, P2G<D, T>{s, T(dt)});
     thr::for_each(thr::device, first, first + s.nodes, GridUpdate<D, T>{s, T(dt)});
     if (has_loads_) thr::copy(impulse_.begin(), impulse_.end(), load_impulse_.begin());
-    thr::for_each(thr::device, first, first + n_, G2P<D, T>{s, T(dt)});
+    thr::for_each(thr::device, first, first + n_, G2P<D, T>{s, T(dt), T(mpm::fill_rate(dt, c_, dx_))});
     host_fresh_ = false;
     audit(T(dt));
     time_ += dt;
@@ -714,6 +721,8 @@ class MpmCuda final : public Simulation {
     s.gamma = gamma_;
     s.mu = mu_;
     s.psi = psi_;
+    s.fill_tol = T(mpm::kFillTolerance);
+    s.inv_cell_volume = T(1) / T(std::pow(dx_, D));
     s.dx_d = dx_;
     s.walls = raw(walls_);
     s.n_walls = n_walls_;
