@@ -109,12 +109,12 @@ TradeoffSpec parse_tradeoff_spec(const std::string& json_text, const std::string
 
   const json outputs = root.value("outputs", json::object());
   if (!outputs.is_object())
-    throw fail("outputs", "must be an object {gauges, loads, window_s, arrival_threshold_m}");
+    throw fail("outputs", "must be an object {gauges, loads, window_s, arrival_threshold_m, front_s}");
   for (auto it = outputs.begin(); it != outputs.end(); ++it)
     if (it.key() != "gauges" && it.key() != "loads" && it.key() != "window_s" &&
-        it.key() != "arrival_threshold_m")
+        it.key() != "arrival_threshold_m" && it.key() != "front_s")
       throw fail("outputs." + it.key(),
-                 "unknown field (known: gauges, loads, window_s, arrival_threshold_m)");
+                 "unknown field (known: gauges, loads, window_s, arrival_threshold_m, front_s)");
   auto names = [&](const char* key, const std::vector<std::string>& allowed, std::vector<std::string>& out,
                    bool all_by_default) {
     if (!outputs.contains(key)) {
@@ -153,6 +153,15 @@ TradeoffSpec parse_tradeoff_spec(const std::string& json_text, const std::string
     if (!a.is_number() || !(a.get<double>() > 0) || !(a.get<double>() <= 1))
       throw fail("outputs.arrival_threshold_m", "must be a number in (0, 1] m, got " + a.dump());
     spec.arrival_threshold_m = a.get<double>();
+  }
+  if (outputs.contains("front_s")) {
+    const json& a = outputs["front_s"];
+    if (!a.is_number() || !(a.get<double>() >= 0) ||
+        !(a.get<double>() <= spec.window_end_s - spec.window_start_s))
+      throw fail("outputs.front_s", "must be a number in [0, " +
+                                        num(spec.window_end_s - spec.window_start_s) +
+                                        "] s (0: RMS over the whole window), got " + a.dump());
+    spec.front_s = a.get<double>();
   }
 
   if (!root.contains("reference") || !root["reference"].is_object() || root["reference"].size() != 1)
@@ -304,8 +313,19 @@ TradeoffResult evaluate_tradeoff(const TradeoffSpec& spec, const std::string& db
         if (std::isfinite(v)) sum[m] += v, ++n[m];
       };
       for (const auto& g : spec.gauges) {
-        const GaugeError e = compare_gauge(g, read_gauge(h5[k], g), ref_gauges.at(g), spec.window_start_s,
-                                           spec.window_end_s, spec.arrival_threshold_m);
+        const Series sim = read_gauge(h5[k], g);
+        const Series& ref = ref_gauges.at(g);
+        GaugeError e =
+            compare_gauge(g, sim, ref, spec.window_start_s, spec.window_end_s, spec.arrival_threshold_m);
+        if (spec.front_s > 0) {
+          // The RMS around the reference's front only; where it never arrived, over the whole window.
+          const double a = e.ref_arrival_s;
+          if (std::isfinite(a)) {
+            e.rms_m = rms_difference(sim, ref, std::max(spec.window_start_s, a - spec.front_s / 4),
+                                     std::min(spec.window_end_s, a + spec.front_s));
+            e.rms_rel = e.rms_m / std::fabs(e.ref_peak_m);
+          }
+        }
         add(kRms, e.rms_rel);
         add(kPeak, std::fabs(e.peak_rel));
         if (std::isfinite(e.arrival_diff_s))
@@ -338,8 +358,11 @@ TradeoffResult evaluate_tradeoff(const TradeoffSpec& spec, const std::string& db
 std::string tradeoff_markdown(const TradeoffSpec& spec, const TradeoffResult& result) {
   std::ostringstream md;
   md << "Errors against the " << result.reference << ", over t = " << num(spec.window_start_s) << " to "
-     << num(spec.window_end_s)
-     << " s. `rms`: mean over gauges of RMS(difference) / reference peak; `peak`: mean of |peak error| / "
+     << num(spec.window_end_s) << " s"
+     << (spec.front_s > 0 ? ", RMS from " + num(spec.front_s / 4) + " s before to " + num(spec.front_s) +
+                                " s after the reference's arrival at each gauge"
+                          : std::string())
+     << ". `rms`: mean over gauges of RMS(difference) / reference peak; `peak`: mean of |peak error| / "
         "reference peak (gauges and load cells); `arrival`: mean |arrival difference| (s; where only one "
         "arrived, the time from its arrival to the window's end). Pareto: the settings on the front of that "
         "error against wall time.\n\n";

@@ -11,7 +11,8 @@
 //    "overrides": {"solver.end_time": 4},
 //    "settings": [{"label": "dx 0.02", "solver.dx": 0.02}, {"label": "3D half", "scene": "...", ...}, ...],
 //    "reference": {"setting": "dx 0.02"}  |  {"records": "measured.csv"},
-//    "outputs": {"gauges": ["WG1", ...], "loads": [...], "window_s": [0, 4], "arrival_threshold_m": 0.005},
+//    "outputs": {"gauges": ["WG1", ...], "loads": [...], "window_s": [0, 4], "arrival_threshold_m": 0.005,
+//                "front_s": 1.0},
 //    "run": {"time_limit_s": 1800, "threads": 2}}
 #pragma once
 #include <cmath>
@@ -34,6 +35,10 @@ struct TradeoffSpec {
   std::vector<std::string> gauges, loads;
   double window_start_s = 0, window_end_s = 0;
   double arrival_threshold_m = 0.005;
+  // > 0: each gauge's RMS only over [a - front_s / 4, a + front_s] around the reference's arrival a there
+  // (the bore and what follows it at once), not over the whole window, whose tail (breaking, splash,
+  // reflections) no resolution reproduces sample by sample. 0: the whole window.
+  double front_s = 0;
 };
 
 // Throws flume::InputError naming the file and the field (`settings.3.solver.dx`) with what is allowed.
