@@ -15,6 +15,7 @@
 #include <limits>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -109,6 +110,9 @@ const std::vector<Case>& cases() {
   };
   return list;
 }
+
+// gtest prints a parameter in the test's name for ctest: the case's name, not its bytes.
+void PrintTo(const Case& c, std::ostream* os) { *os << c.name; }
 
 std::vector<Override> overrides_of(const Case& c) {
   std::vector<Override> o;
