@@ -16,6 +16,7 @@
 #include "common/errors.h"
 #include "study/compare.h"
 #include "study/tradeoff.h"
+#include "xml_check.h"
 
 namespace flume::study {
 namespace {
@@ -202,6 +203,7 @@ TEST(TradeoffCli, RunsResumesAndWritesTableCsvAndPlot) {
   const std::string svg = slurp(dir / "out" / "tradeoff.svg");
   EXPECT_EQ(svg.rfind("<svg", 0), 0u);
   EXPECT_NE(svg.find("Pareto front"), std::string::npos);
+  EXPECT_EQ(plot::test::check_xml(svg).error, "") << "tradeoff.svg is not well-formed XML";
   // Again: nothing reruns (the store has every run), and the same table comes out.
   ASSERT_EQ(std::system(cmd.c_str()), 0) << slurp(dir / "log.txt");
   EXPECT_NE(slurp(dir / "log.txt").find("4 finished, 0 to run"), std::string::npos) << slurp(dir / "log.txt");
