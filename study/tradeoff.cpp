@@ -258,6 +258,7 @@ TradeoffResult evaluate_tradeoff(const TradeoffSpec& spec, const std::string& db
     r.reference = spec.reference_setting && *spec.reference_setting == k;
     const auto stored = db.find_run(campaign->id, planned[k].param_hash);
     if (stored) {
+      r.run_id = stored->id;
       r.status = stored->status;
       r.message = stored->message;
       r.wall_s = stored->wall_s;
@@ -353,6 +354,26 @@ TradeoffResult evaluate_tradeoff(const TradeoffSpec& spec, const std::string& db
     for (size_t k = 0; k < front.size(); ++k) result.rows[k].pareto[m] = front[k];
   }
   return result;
+}
+
+void store_errors(const TradeoffResult& result, const std::string& db_file) {
+  store::CampaignStore db(db_file);
+  for (const auto& r : result.rows) {
+    if (r.run_id == 0 || r.status != store::RunStatus::kOk) continue;
+    std::vector<std::pair<std::string, double>> m;
+    for (int k = 0; k < 3; ++k) {
+      const std::string name = std::string("error.") + kErrorNames[k] + (k == kArrival ? "_s" : "");
+      m.emplace_back(name, r.reference ? 0.0 : r.error[k]);
+      m.emplace_back(std::string("pareto.") + kErrorNames[k], r.pareto[k] ? 1.0 : 0.0);
+    }
+    for (const auto& g : r.gauges) {
+      m.emplace_back("error." + g.name + ".rms_m", g.rms_m);
+      m.emplace_back("error." + g.name + ".peak_rel", g.peak_rel);
+      m.emplace_back("error." + g.name + ".arrival_diff_s", g.arrival_diff_s);
+    }
+    for (const auto& l : r.loads) m.emplace_back("error." + l.name + ".peak_rel", l.peak_rel);
+    db.record_metrics(r.run_id, m);
+  }
 }
 
 std::string tradeoff_markdown(const TradeoffSpec& spec, const TradeoffResult& result) {
@@ -575,6 +596,7 @@ int study_main(int argc, char** argv) {
     const int rc = campaigns::run_campaign(spec.campaign, opt, 1);
     if (rc != kExitOk) return rc;
     const TradeoffResult result = evaluate_tradeoff(spec, db);
+    store_errors(result, db);
     write_tradeoff(spec, result, out);
     std::printf("%s\nwrote %s/tradeoff.{md,csv,svg}\n", tradeoff_markdown(spec, result).c_str(), out.c_str());
     return kExitOk;

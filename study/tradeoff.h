@@ -56,7 +56,8 @@ struct LoadError {
 
 struct SettingResult {
   std::string label;
-  std::string changes;  // what the setting sets, "path=value" joined
+  std::int64_t run_id = 0;  // in the store; 0: not there
+  std::string changes;      // what the setting sets, "path=value" joined
   store::RunStatus status = store::RunStatus::kPending;
   std::string message;
   double wall_s = NAN, particle_steps = NAN, peak_rss_mb = NAN;
@@ -81,6 +82,11 @@ struct TradeoffResult {
 // Reads every setting's run from the store and its result file. Throws InputError when the reference has no
 // result (it ended unstable, failed, or has not run).
 TradeoffResult evaluate_tradeoff(const TradeoffSpec& spec, const std::string& db_file);
+
+// Each run's errors into the store as metrics (`error.rms`, `error.peak`, `error.arrival_s`,
+// `pareto.<error>`, `error.<gauge>.rms_m|peak_rel|arrival_diff_s`, `error.<load>.peak_rel`), so that `flume
+// campaign export` and the store's `results_<campaign>` view carry them beside the cost.
+void store_errors(const TradeoffResult& result, const std::string& db_file);
 
 // tradeoff.md, tradeoff.csv and tradeoff.svg in `out_dir`.
 void write_tradeoff(const TradeoffSpec& spec, const TradeoffResult& result, const std::string& out_dir);

@@ -216,6 +216,13 @@ TEST(TradeoffCli, RunsResumesAndWritesTableCsvAndPlot) {
   ASSERT_EQ(sqlite3_step(st), SQLITE_ROW);
   EXPECT_EQ(sqlite3_column_int(st, 0), 4);
   sqlite3_finalize(st);
+  // The errors are stored beside the cost: every ok run has error.peak (0 for the reference) and no NaN.
+  sqlite3_prepare_v2(db, "SELECT count(*), sum(value IS NULL) FROM metrics WHERE name = 'error.peak'", -1,
+                     &st, nullptr);
+  ASSERT_EQ(sqlite3_step(st), SQLITE_ROW);
+  EXPECT_EQ(sqlite3_column_int(st, 0), 4);
+  EXPECT_EQ(sqlite3_column_int(st, 1), 0);
+  sqlite3_finalize(st);
   sqlite3_close(db);
   // A bad spec: exit 2 and the field named.
   std::ofstream(dir / "bad.json") << R"({"name": "bad", "scene": ")" + kSrc +
