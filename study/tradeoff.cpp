@@ -134,6 +134,7 @@ TradeoffSpec parse_tradeoff_spec(const std::string& json_text, const std::string
     }
   };
   names("gauges", scene_gauges, spec.gauges, true);
+  spec.scene_gauges = scene_gauges;
   names("loads", scene_loads, spec.loads, true);
   if (spec.gauges.empty() && spec.loads.empty())
     throw fail("outputs", "names no gauge and no load cell to compare (the scene has gauges: " +
@@ -181,11 +182,20 @@ TradeoffSpec parse_tradeoff_spec(const std::string& json_text, const std::string
     fs::path p(ref["records"].get<std::string>());
     if (!p.is_absolute() && !fs::exists(p) && !base_dir.empty()) p = fs::path(base_dir) / p;
     spec.reference_records = p.string();
+    if (!outputs.contains("loads")) spec.loads.clear();  // a gauge record: gauges only unless asked
     if (!spec.loads.empty())
       throw fail("outputs.loads", "a measured gauge record has no loads to compare: list gauges only");
     // Checked now, so a study does not run for an hour before finding its record unreadable.
-    calibration::read_target_csv(spec.reference_records, {}, spec.gauges, spec.window_start_s,
-                                 spec.window_end_s, 1.0, "reference.records");
+    std::set<std::string> have;
+    for (const auto& rec :
+         calibration::read_target_csv(spec.reference_records, {}, spec.scene_gauges, spec.window_start_s,
+                                      spec.window_end_s, 1.0, "reference.records"))
+      have.insert(rec.gauge);
+    for (size_t i = 0; i < spec.gauges.size(); ++i)
+      if (!have.count(spec.gauges[i]))
+        throw fail(
+            "outputs.gauges." + std::to_string(i),
+            "'" + spec.gauges[i] + "' has no column in the reference record " + spec.reference_records);
   } else {
     throw fail("reference." + ref.begin().key(), "unknown field (known: setting, records)");
   }
@@ -297,7 +307,7 @@ TradeoffResult evaluate_tradeoff(const TradeoffSpec& spec, const std::string& db
     result.reference = "setting '" + r.label + "' (" + r.changes + ")";
   } else {
     for (const auto& rec :
-         calibration::read_target_csv(spec.reference_records, {}, spec.gauges, spec.window_start_s,
+         calibration::read_target_csv(spec.reference_records, {}, spec.scene_gauges, spec.window_start_s,
                                       spec.window_end_s, 1.0, "reference.records"))
       ref_gauges[rec.gauge] = {rec.time, rec.elevation};
     result.reference = "measured record " + spec.reference_records;

@@ -33,6 +33,7 @@ struct TradeoffSpec {
   std::optional<size_t> reference_setting;  // the setting compared against, or
   std::string reference_records;            // a measured gauge record (CSV, calibration/records.h)
   std::vector<std::string> gauges, loads;
+  std::vector<std::string> scene_gauges;  // every gauge of the base scene (a record may have columns for all)
   double window_start_s = 0, window_end_s = 0;
   double arrival_threshold_m = 0.005;
   // > 0: each gauge's RMS only over [a - front_s / 4, a + front_s] around the reference's arrival a there

@@ -224,6 +224,37 @@ TEST(TradeoffCli, RunsResumesAndWritesTableCsvAndPlot) {
   EXPECT_EQ(sqlite3_column_int(st, 1), 0);
   sqlite3_finalize(st);
   sqlite3_close(db);
+  // A measured record as the reference: the fine run's gauges as a CSV, and the coarse setting against it
+  // gives the errors it had against the fine setting.
+  const std::string target = std::string(FLUME_EXE) + " calibrate target " +
+                             (dir / "s.sqlite.runs" / "mini" / "run-000000" / "result.h5").string() +
+                             " --out " + (dir / "fine.csv").string() + " > /dev/null 2>&1";
+  ASSERT_EQ(std::system(target.c_str()), 0);
+  std::ofstream(dir / "records.json") << R"({"name": "mini-records", "scene": ")" + kSrc +
+                                             R"(/scenes/waseda/waseda_2d.json",
+    "overrides": {"solver.end_time": 0.3, "reservoir.forcing.t99_s": 0.1},
+    "settings": [{"label": "coarse", "solver.dx": 0.05}, {"label": "coarse cfl 0.8", "solver.dx": 0.05, "solver.cfl": 0.8}],
+    "reference": {"records": "fine.csv"}, "outputs": {"gauges": ["WG1", "WG2"], "window_s": [0, 0.3]},
+    "run": {"threads": 1}})";
+  const std::string rec = std::string(FLUME_EXE) + " study tradeoff " + (dir / "records.json").string() +
+                          " --db " + (dir / "s.sqlite").string() + " --out " +
+                          (dir / "out-records").string() + " > " + (dir / "log.txt").string() + " 2>&1";
+  ASSERT_EQ(std::system(rec.c_str()), 0) << slurp(dir / "log.txt");
+  auto row_of = [](const std::string& csv, const std::string& label) {
+    const auto at = csv.find("\n\"" + label + "\",");
+    return at == std::string::npos ? std::string() : csv.substr(at + 1, csv.find('\n', at + 1) - at - 1);
+  };
+  const std::string csv_rec = slurp(dir / "out-records" / "tradeoff.csv");
+  // Same columns after the label and changes; the error columns agree (the CSV keeps 10 digits of both).
+  auto errors = [](const std::string& row) {
+    std::vector<std::string> cells;
+    std::stringstream ss(row);
+    for (std::string c; std::getline(ss, c, ',');) cells.push_back(c);
+    return cells.size() > 11 ? cells[10] + "," + cells[11] : std::string("?");  // error_peak, error_arrival_s
+  };
+  EXPECT_EQ(errors(row_of(csv_rec, "coarse")), errors(row_of(csv, "coarse"))) << csv_rec << "\n" << csv;
+  EXPECT_NE(slurp(dir / "out-records" / "tradeoff.md").find("measured record"), std::string::npos);
+
   // A bad spec: exit 2 and the field named.
   std::ofstream(dir / "bad.json") << R"({"name": "bad", "scene": ")" + kSrc +
                                          R"(/scenes/waseda/waseda_2d.json",
