@@ -8,6 +8,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
@@ -163,6 +164,12 @@ std::vector<store::PlannedRun> plan_runs(const CampaignSpec& spec) {
     json params = json::object();
     for (size_t j = 0; j < spec.parameters.size(); ++j) {
       const auto& p = spec.parameters[j];
+      if (!has_value(spec, k, j)) {  // a list design's point that leaves the path alone: NULL in the store
+        store::ParamValue none;
+        none.number = std::nan("");
+        r.values.push_back(none);
+        continue;
+      }
       const json v = json::parse(value_json(p, values[k][j]));
       params[p.path] = v;
       store::ParamValue pv;
@@ -184,13 +191,16 @@ std::vector<std::string> run_command(const CampaignSpec& spec, size_t index, con
                                      const std::string& out_dir) {
   std::vector<std::string> argv = {exe};
   if (spec.model.empty()) {
-    argv.insert(argv.end(), {"run", spec.scene, "--out", out_dir, "--threads", std::to_string(spec.run.threads)});
+    const std::string& scene = spec.listed ? spec.point_scenes.at(index) : spec.scene;
+    argv.insert(argv.end(), {"run", scene, "--out", out_dir, "--threads", std::to_string(spec.run.threads)});
   } else {
     argv.insert(argv.end(), {"model", spec.model, "--out", out_dir});
   }
   for (const auto& [path, value] : spec.overrides) argv.insert(argv.end(), {"--set", path + "=" + value});
-  for (size_t j = 0; j < spec.parameters.size(); ++j)
+  for (size_t j = 0; j < spec.parameters.size(); ++j) {
+    if (!has_value(spec, index, j) || (spec.listed && spec.parameters[j].path == kScenePath)) continue;
     argv.insert(argv.end(), {"--set", spec.parameters[j].path + "=" + value_json(spec.parameters[j], spec.points.values.at(index)[j])});
+  }
   return argv;
 }
 

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
@@ -236,6 +237,115 @@ std::string read_file(const std::string& file) {
   return ss.str();
 }
 
+// The overrides and the values design point k of a list design sets, as `--set` pairs (not its scene).
+std::vector<std::pair<std::string, std::string>> list_point_sets(const CampaignSpec& spec, size_t k) {
+  std::vector<std::pair<std::string, std::string>> sets = spec.overrides;
+  for (size_t j = 0; j < spec.parameters.size(); ++j)
+    if (has_value(spec, k, j) && spec.parameters[j].path != kScenePath)
+      sets.emplace_back(spec.parameters[j].path, value_json(spec.parameters[j], spec.points.values[k][j]));
+  return sets;
+}
+
+// Each point of a list design against its own scene (or the model): an error names the point and, where the
+// scene says which, the path of that point it rejects.
+void validate_list_points(const CampaignSpec& spec) {
+  std::map<std::string, std::string> texts;  // scene file -> its text
+  for (size_t k = 0; k < spec.points.values.size(); ++k) {
+    const std::string at = "design.points." + std::to_string(k);
+    const auto sets = list_point_sets(spec, k);
+    auto field_of = [&](const std::string& field) {
+      for (size_t j = 0; j < spec.parameters.size(); ++j) {
+        const std::string& path = spec.parameters[j].path;
+        if (has_value(spec, k, j) && (field == path || field.rfind(path + ".", 0) == 0 || path.rfind(field + ".", 0) == 0))
+          return at + "." + path;
+      }
+      for (const auto& [path, value] : spec.overrides)
+        if (field == path || field.rfind(path + ".", 0) == 0 || path.rfind(field + ".", 0) == 0) return "overrides." + path;
+      return at;
+    };
+    if (!spec.model.empty()) {
+      const std::string p = check_model_inputs(spec.model, sets);
+      if (!p.empty()) throw InputError(spec.file, field_of(p.substr(0, p.find(':'))), "rejected by model " + spec.model + ": " + p);
+      continue;
+    }
+    const std::string& scene = spec.point_scenes.at(k);
+    if (!texts.count(scene)) texts[scene] = read_file(scene);
+    std::vector<Override> all;
+    for (const auto& [path, value] : sets) all.push_back({path, value});
+    try {
+      parse_scene_text(texts[scene], scene, all);
+    } catch (const InputError& e) {
+      throw InputError(spec.file, field_of(e.field()), "rejected by the scene: " + std::string(e.what()));
+    }
+  }
+}
+
+// Reads `design.points` of a list design into choice parameters and their value indices (see spec.h).
+void read_list_design(Reader& d, const json& design_json, CampaignSpec& spec, const std::string& base_dir) {
+  const json& points = d.array("points");
+  if (points.empty()) d.fail("points", "is required: a non-empty array of objects {\"label\": ..., path: value, ...}");
+  std::vector<std::string> paths;
+  std::map<std::string, std::vector<json>> values;  // path -> its distinct values, in order of appearance
+  std::vector<std::map<std::string, json>> given(points.size());
+  std::set<std::string> labels;
+  for (size_t i = 0; i < points.size(); ++i) {
+    Reader p(points[i], "design.points." + std::to_string(i), spec.file);
+    std::string label, scene;
+    for (auto it = design_json["points"][i].begin(); it != design_json["points"][i].end(); ++it) {
+      const std::string& key = it.key();
+      if (key == "label") {
+        label = p.string("label", std::nullopt);
+        if (!labels.insert(label).second) p.fail("label", "'" + label + "' is already the label of another point");
+        continue;
+      }
+      p.accept(key);
+      const json& v = it.value();
+      if (key == kScenePath) {
+        if (!v.is_string()) p.fail(key, std::string("must be a scene file (a string), got ") + type_name(v));
+        if (resolve_scene(v.get<std::string>(), base_dir).empty())
+          p.fail(key, "cannot open '" + v.get<std::string>() + "' (looked in the current directory and next to the spec)");
+      } else if (!v.is_number() && !v.is_string()) {
+        p.fail(key, std::string("must be a number or a string, got ") + type_name(v));
+      }
+      for (const auto& [path, fixed] : spec.overrides)
+        if (path == key) p.fail(key, "'" + key + "' is also a fixed override");
+      if (!values.count(key)) paths.push_back(key);
+      auto& seen = values[key];
+      if (!seen.empty() && seen.front().is_string() != v.is_string())
+        p.fail(key, std::string("is ") + type_name(v) + " here but " + type_name(seen.front()) + " in an earlier point");
+      if (std::find(seen.begin(), seen.end(), v) == seen.end()) seen.push_back(v);
+      given[i][key] = v;
+    }
+    p.finish();
+    spec.point_labels.push_back(label);
+    spec.point_scenes.push_back(given[i].count(kScenePath)
+                                    ? resolve_scene(given[i][kScenePath].get<std::string>(), base_dir)
+                                    : spec.scene);
+    if (!spec.model.empty() && given[i].count(kScenePath))
+      p.fail(kScenePath, "a model campaign has no scene to replace");
+  }
+  for (const auto& path : paths) {
+    ParameterSpec ps;
+    ps.path = path;
+    ps.distribution.type = DistributionType::kChoice;
+    for (const auto& v : values[path]) {
+      if (v.is_string())
+        ps.distribution.text_choices.push_back(v.get<std::string>());
+      else
+        ps.distribution.numeric_choices.push_back(v.get<double>());
+    }
+    spec.parameters.push_back(ps);
+  }
+  spec.points.values.assign(points.size(), std::vector<double>(paths.size(), std::nan("")));
+  for (size_t i = 0; i < points.size(); ++i)
+    for (size_t j = 0; j < paths.size(); ++j) {
+      auto it = given[i].find(paths[j]);
+      if (it == given[i].end()) continue;
+      const auto& seen = values[paths[j]];
+      spec.points.values[i][j] = static_cast<double>(std::find(seen.begin(), seen.end(), it->second) - seen.begin());
+    }
+}
+
 // Checks that the scene (or model) accepts the overrides, each parameter path, and every design point.
 void validate_against_target(const CampaignSpec& spec, const sampling::Design& design) {
   const size_t np = spec.parameters.size();
@@ -254,6 +364,10 @@ void validate_against_target(const CampaignSpec& spec, const sampling::Design& d
     return "parameters";
   };
 
+  if (spec.listed) {
+    validate_list_points(spec);
+    return;
+  }
   if (!spec.model.empty()) {
     std::string p = check_model_inputs(spec.model, spec.overrides);
     if (!p.empty()) throw InputError(spec.file, "overrides." + p.substr(0, p.find(':')), p.substr(p.find(": ") + 2));
@@ -320,7 +434,12 @@ std::string text_hash(const std::string& text) {
   return buf;
 }
 
+bool has_value(const CampaignSpec& spec, size_t index, size_t j) {
+  return !spec.listed || std::isfinite(spec.points.values.at(index).at(j));
+}
+
 std::string value_json(const ParameterSpec& p, double value) {
+  if (!std::isfinite(value)) return "null";  // a list design's point that leaves the path alone
   const auto& d = p.distribution;
   if (d.type == DistributionType::kChoice) {
     const auto i = static_cast<size_t>(std::llround(value));
@@ -376,8 +495,13 @@ CampaignSpec parse_campaign_spec(const std::string& json_text, const std::string
     o.finish();
   }
 
+  spec.listed = root_json.contains("design") && root_json["design"].is_object() &&
+                root_json["design"].contains("type") && root_json["design"]["type"] == "list";
   const json& params = root.array("parameters");
-  if (params.empty()) root.fail("parameters", "is required: a non-empty array of {path, distribution}");
+  if (spec.listed && !params.empty())
+    root.fail("parameters", "must be absent with a list design (its points name the paths they set)");
+  if (params.empty() && !spec.listed)
+    root.fail("parameters", "is required: a non-empty array of {path, distribution}");
   std::set<std::string> paths;
   for (size_t i = 0; i < params.size(); ++i) {
     Reader p(params[i], "parameters." + std::to_string(i), spec.file);
@@ -395,6 +519,7 @@ CampaignSpec parse_campaign_spec(const std::string& json_text, const std::string
   }
 
   const json& corr = root.array("correlation");
+  if (spec.listed && !corr.empty()) root.fail("correlation", "must be absent with a list design");
   for (size_t i = 0; i < corr.size(); ++i) {
     Reader c(corr[i], "correlation." + std::to_string(i), spec.file);
     const json& pair = c.array("parameters");
@@ -414,7 +539,12 @@ CampaignSpec parse_campaign_spec(const std::string& json_text, const std::string
     spec.correlations.push_back(rc);
   }
 
-  {
+  if (spec.listed) {
+    Reader d = root.object("design");
+    d.accept("type");
+    read_list_design(d, root_json["design"], spec, base_dir);
+    d.finish();
+  } else {
     if (!root.has("design")) root.fail("design", "is required (an object with type and samples)");
     Reader d = root.object("design");
     const std::vector<std::pair<const char*, DesignType>> types = {{"monte_carlo", DesignType::kMonteCarlo},
@@ -422,7 +552,8 @@ CampaignSpec parse_campaign_spec(const std::string& json_text, const std::string
                                                                    {"sobol", DesignType::kSobol},
                                                                    {"grid", DesignType::kGrid},
                                                                    {"one_at_a_time", DesignType::kOneAtATime},
-                                                                   {"saltelli", DesignType::kSaltelli}};
+                                                                   {"saltelli", DesignType::kSaltelli},
+                                                                   {"list", DesignType::kMonteCarlo}};
     spec.design.type = d.choice<DesignType>("type", std::nullopt, types);
     const auto t = spec.design.type;
     const bool needs_samples = t == DesignType::kMonteCarlo || t == DesignType::kLatinHypercube ||
@@ -451,7 +582,8 @@ CampaignSpec parse_campaign_spec(const std::string& json_text, const std::string
     if (n > 10000000) d.fail("samples", "gives " + std::to_string(n) + " runs; at most 10000000 are allowed");
   }
 
-  spec.seed = static_cast<std::uint64_t>(root.integer("seed", std::nullopt, 0, 4294967295LL));
+  spec.seed = static_cast<std::uint64_t>(
+      root.integer("seed", spec.listed ? std::optional<std::int64_t>(0) : std::nullopt, 0, 4294967295LL));
 
   {
     Reader r = root.object("run");
@@ -468,9 +600,16 @@ CampaignSpec parse_campaign_spec(const std::string& json_text, const std::string
   json identity = root_json;
   identity.erase("run");
   identity.erase("description");
+  // A list design's labels only name its points in tables: renaming one changes no result.
+  if (spec.listed)
+    for (auto& point : identity["design"]["points"]) point.erase("label");
   spec.canonical = identity.dump();
   spec.hash = text_hash(spec.canonical);
 
+  if (spec.listed) {
+    validate_against_target(spec, spec.points);
+    return spec;
+  }
   std::vector<Distribution> dists;
   for (const auto& p : spec.parameters) dists.push_back(p.distribution);
   sampling::Design design;

@@ -34,6 +34,15 @@ struct CampaignSpec {
   std::vector<ParameterSpec> parameters;
   std::vector<sampling::RankCorrelation> correlations;
   sampling::DesignSpec design;
+  // A `list` design (`"design": {"type": "list", "points": [{path: value, ...}, ...]}`): the points are given
+  // one by one, as a study of chosen settings needs (a fidelity ladder, a set of variants). Each path met in
+  // any point becomes a `choice` parameter over the values given for it; a point that does not name a path
+  // leaves the scene's value (its design value is NaN: no `--set`, NULL in the store). Two keys are not scene
+  // paths: `scene` (another scene file for that point: a variant; it is a parameter, so the store shows it)
+  // and `label` (a name for tables, not a parameter).
+  bool listed = false;
+  std::vector<std::string> point_labels;  // listed: one per point ("" when none given)
+  std::vector<std::string> point_scenes;  // listed: absolute scene file of each point (spec.scene when not set)
   std::uint64_t seed = 0;
   RunSettings run;
   std::string canonical;  // the spec's identity as canonical JSON (sorted keys, without `run`/`description`)
@@ -47,6 +56,12 @@ struct CampaignSpec {
 CampaignSpec load_campaign_spec(const std::string& file);
 CampaignSpec parse_campaign_spec(const std::string& json_text, const std::string& file_label,
                                  const std::string& base_dir);
+
+// The parameter path of a list design that selects the scene file rather than setting a scene value.
+inline constexpr const char* kScenePath = "scene";
+
+// True when design point `index` gives parameter `j` a value (always, except in list designs).
+bool has_value(const CampaignSpec& spec, size_t index, size_t j);
 
 // JSON text of a parameter value for `--set path=value` and for the store's JSON column.
 std::string value_json(const ParameterSpec& p, double value);

@@ -10,6 +10,9 @@
 #include "flume_version.h"
 #include "report/report.h"
 #include "solver/commands.h"
+#ifdef FLUME_HAVE_STUDY
+#include "study/tradeoff.h"
+#endif
 
 namespace {
 
@@ -27,6 +30,9 @@ const std::vector<Command>& commands() {
       {"campaign", flume::campaign_main, "campaign run SPEC.json --db FILE [--workers N] | status --db FILE | export --db FILE --csv OUT"},
       {"report", flume::report_main, "report --db FILE --campaign NAME --out DIR [--thresholds metric=v1,v2 ...]   HTML/JSON/CSV report"},
       {"model", flume::model_main, "model ishigami|test --out DIR [--set name=value ...]   analytic stand-ins for `run`"},
+#ifdef FLUME_HAVE_STUDY
+      {"study", flume::study::study_main, "study tradeoff SPEC.json --db FILE [--out DIR] [--workers N]   error against cost over fidelity settings, Pareto front"},
+#endif
       {"calibrate", flume::calibration::calibrate_main, "calibrate SPEC.json --db FILE --out DIR [--workers N] | target RESULT.h5 --out CSV | history --db FILE"},
   };
   return list;

@@ -448,6 +448,29 @@ void CampaignStore::record_outcome(std::int64_t run_id, const RunOutcome& o) {
   if (new_metric) refresh_results_view(campaign);
 }
 
+void CampaignStore::record_metrics(std::int64_t run_id, const std::vector<std::pair<std::string, double>>& metrics) {
+  std::int64_t campaign = 0;
+  bool new_metric = false;
+  {
+    Transaction t(db_);
+    Stmt c(db_, "SELECT campaign FROM runs WHERE id = ?1");
+    c.bind(1, run_id);
+    if (!c.step()) throw StoreError("no run with id " + std::to_string(run_id));
+    campaign = c.i64(0);
+    Stmt m(db_, "INSERT OR REPLACE INTO metrics (run, name, value) VALUES (?1, ?2, ?3)");
+    auto& known = known_metrics_[campaign];
+    for (const auto& [name, value] : metrics) {
+      if (!std::isfinite(value)) continue;
+      m.bind(1, run_id).bind(2, name).bind(3, value);
+      m.run();
+      m.reset();
+      if (std::find(known.begin(), known.end(), name) == known.end()) new_metric = true;
+    }
+    t.commit();
+  }
+  if (new_metric) refresh_results_view(campaign);
+}
+
 // The per-campaign wide query: one column per parameter and per metric name seen so far.
 std::string CampaignStore::results_select(std::int64_t campaign, std::vector<std::string>* metric_names) {
   std::vector<std::string> paths, metrics;

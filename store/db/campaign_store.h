@@ -158,6 +158,10 @@ class CampaignStore {
   // The end of a run: status, message, cost and metrics in one transaction.
   void record_outcome(std::int64_t run_id, const RunOutcome& outcome);
 
+  // Metrics derived after the run (a study's errors against its reference), added to or replacing the run's
+  // own, in one transaction. Non-finite values are not stored.
+  void record_metrics(std::int64_t run_id, const std::vector<std::pair<std::string, double>>& metrics);
+
   // Runs added one at a time (a calibration: the design is not known in advance). add_run adds `run` as
   // pending, as the next design point, unless a run with its parameter hash exists; returns the run's id.
   std::int64_t add_run(std::int64_t campaign, const PlannedRun& run);

@@ -1,0 +1,622 @@
+#include "study/tradeoff.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <sstream>
+
+#include "calibration/records.h"
+#include "campaigns/engine.h"
+#include "common/errors.h"
+#include "common/plot/figure.h"
+#include "solver/scene.h"
+#include "store/h5/run_file.h"
+
+namespace flume::study {
+namespace {
+
+using json = nlohmann::json;
+namespace fs = std::filesystem;
+
+std::string num(double v, int digits = 3) {
+  if (!std::isfinite(v)) return "-";
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*g", digits, v);
+  return buf;
+}
+std::string fixed(double v, int decimals) {
+  if (!std::isfinite(v)) return "-";
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
+  return buf;
+}
+
+// A campaign error speaks of `design.points.K...`; the study's author wrote `settings.K...`.
+InputError as_study_error(const InputError& e, const std::string& file) {
+  std::string field = e.field();
+  const std::string from = "design.points";
+  if (field.rfind(from, 0) == 0) field = "settings" + field.substr(from.size());
+  if (field == "design") field = "settings";
+  return InputError(file, field, e.problem());
+}
+
+}  // namespace
+
+TradeoffSpec parse_tradeoff_spec(const std::string& json_text, const std::string& file_label,
+                                 const std::string& base_dir) {
+  TradeoffSpec spec;
+  spec.file = file_label;
+  auto fail = [&](const std::string& field, const std::string& what) -> InputError {
+    return InputError(file_label, field, what);
+  };
+  json root;
+  try {
+    root = json::parse(json_text);
+  } catch (const json::parse_error& e) {
+    throw fail("", std::string("not valid JSON: ") + e.what());
+  }
+  if (!root.is_object()) throw fail("", "must be a JSON object");
+  static const std::set<std::string> known = {"name",     "description", "scene",   "overrides",
+                                              "settings", "reference",   "outputs", "run"};
+  for (auto it = root.begin(); it != root.end(); ++it)
+    if (!known.count(it.key()))
+      throw fail(
+          it.key(),
+          "unknown field (known: name, description, scene, overrides, settings, reference, outputs, run)");
+  if (!root.contains("settings") || !root["settings"].is_array() || root["settings"].size() < 2)
+    throw fail("settings",
+               "is required: an array of at least two settings {\"label\": ..., path: value, ...}");
+  const json& settings = root["settings"];
+  for (size_t i = 0; i < settings.size(); ++i) {
+    const std::string at = "settings." + std::to_string(i);
+    if (!settings[i].is_object()) throw fail(at, "must be an object {\"label\": ..., path: value, ...}");
+    if (!settings[i].contains("label") || !settings[i]["label"].is_string() ||
+        settings[i]["label"].get<std::string>().empty())
+      throw fail(at + ".label", "is required: a non-empty string naming the setting in tables and plots");
+    spec.labels.push_back(settings[i]["label"].get<std::string>());
+  }
+
+  // The runs: a campaign whose design is the list of settings.
+  json campaign = {{"design", {{"type", "list"}, {"points", settings}}}};
+  for (const char* key : {"name", "description", "scene", "overrides", "run"})
+    if (root.contains(key)) campaign[key] = root[key];
+  try {
+    spec.campaign = campaigns::parse_campaign_spec(campaign.dump(), file_label, base_dir);
+  } catch (const InputError& e) {
+    throw as_study_error(e, file_label);
+  }
+
+  // What the base scene offers, for the outputs' names and the default window.
+  std::vector<Override> fixed_sets;
+  for (const auto& [path, value] : spec.campaign.overrides) fixed_sets.push_back({path, value});
+  const Scene scene = load_scene(spec.campaign.scene, fixed_sets);
+  std::vector<std::string> scene_gauges, scene_loads;
+  for (const auto& g : scene.instruments.gauges) scene_gauges.push_back(g.name);
+  for (const auto& l : scene.instruments.loads) scene_loads.push_back(l.name);
+  auto joined = [](const std::vector<std::string>& v) {
+    std::string s;
+    for (const auto& x : v) s += (s.empty() ? "" : ", ") + x;
+    return s.empty() ? std::string("none") : s;
+  };
+
+  const json outputs = root.value("outputs", json::object());
+  if (!outputs.is_object())
+    throw fail("outputs", "must be an object {gauges, loads, window_s, arrival_threshold_m, front_s}");
+  for (auto it = outputs.begin(); it != outputs.end(); ++it)
+    if (it.key() != "gauges" && it.key() != "loads" && it.key() != "window_s" &&
+        it.key() != "arrival_threshold_m" && it.key() != "front_s")
+      throw fail("outputs." + it.key(),
+                 "unknown field (known: gauges, loads, window_s, arrival_threshold_m, front_s)");
+  auto names = [&](const char* key, const std::vector<std::string>& allowed, std::vector<std::string>& out,
+                   bool all_by_default) {
+    if (!outputs.contains(key)) {
+      if (all_by_default) out = allowed;
+      return;
+    }
+    const json& a = outputs[key];
+    if (!a.is_array())
+      throw fail(std::string("outputs.") + key, "must be an array of names (" + joined(allowed) + ")");
+    for (size_t i = 0; i < a.size(); ++i) {
+      const std::string field = std::string("outputs.") + key + "." + std::to_string(i);
+      if (!a[i].is_string()) throw fail(field, "must be a name (" + joined(allowed) + ")");
+      const std::string n = a[i].get<std::string>();
+      if (std::find(allowed.begin(), allowed.end(), n) == allowed.end())
+        throw fail(field, "'" + n + "' is not in the scene (it has: " + joined(allowed) + ")");
+      out.push_back(n);
+    }
+  };
+  names("gauges", scene_gauges, spec.gauges, true);
+  spec.scene_gauges = scene_gauges;
+  names("loads", scene_loads, spec.loads, true);
+  if (spec.gauges.empty() && spec.loads.empty())
+    throw fail("outputs", "names no gauge and no load cell to compare (the scene has gauges: " +
+                              joined(scene_gauges) + "; loads: " + joined(scene_loads) + ")");
+  spec.window_start_s = 0;
+  spec.window_end_s = scene.solver.end_time;
+  if (outputs.contains("window_s")) {
+    const json& w = outputs["window_s"];
+    if (!w.is_array() || w.size() != 2 || !w[0].is_number() || !w[1].is_number() ||
+        !(w[0].get<double>() >= 0) || !(w[1].get<double>() > w[0].get<double>()))
+      throw fail("outputs.window_s", "must be [t0, t1] with 0 <= t0 < t1 (s), got " + w.dump());
+    spec.window_start_s = w[0].get<double>();
+    spec.window_end_s = w[1].get<double>();
+  }
+  if (outputs.contains("arrival_threshold_m")) {
+    const json& a = outputs["arrival_threshold_m"];
+    if (!a.is_number() || !(a.get<double>() > 0) || !(a.get<double>() <= 1))
+      throw fail("outputs.arrival_threshold_m", "must be a number in (0, 1] m, got " + a.dump());
+    spec.arrival_threshold_m = a.get<double>();
+  }
+  if (outputs.contains("front_s")) {
+    const json& a = outputs["front_s"];
+    if (!a.is_number() || !(a.get<double>() >= 0) ||
+        !(a.get<double>() <= spec.window_end_s - spec.window_start_s))
+      throw fail("outputs.front_s", "must be a number in [0, " +
+                                        num(spec.window_end_s - spec.window_start_s) +
+                                        "] s (0: RMS over the whole window), got " + a.dump());
+    spec.front_s = a.get<double>();
+  }
+
+  if (!root.contains("reference") || !root["reference"].is_object() || root["reference"].size() != 1)
+    throw fail("reference",
+               "is required: {\"setting\": LABEL} (one of the settings) or {\"records\": CSV file}");
+  const json& ref = root["reference"];
+  if (ref.contains("setting")) {
+    if (!ref["setting"].is_string())
+      throw fail("reference.setting", "must be the label of one of the settings");
+    const std::string label = ref["setting"].get<std::string>();
+    const auto it = std::find(spec.labels.begin(), spec.labels.end(), label);
+    if (it == spec.labels.end())
+      throw fail("reference.setting", "'" + label + "' is not the label of any setting");
+    spec.reference_setting = static_cast<size_t>(it - spec.labels.begin());
+  } else if (ref.contains("records")) {
+    if (!ref["records"].is_string()) throw fail("reference.records", "must be a CSV file of gauge records");
+    fs::path p(ref["records"].get<std::string>());
+    if (!p.is_absolute() && !fs::exists(p) && !base_dir.empty()) p = fs::path(base_dir) / p;
+    spec.reference_records = p.string();
+    if (!outputs.contains("loads")) spec.loads.clear();  // a gauge record: gauges only unless asked
+    if (!spec.loads.empty())
+      throw fail("outputs.loads", "a measured gauge record has no loads to compare: list gauges only");
+    // Checked now, so a study does not run for an hour before finding its record unreadable.
+    std::set<std::string> have;
+    for (const auto& rec :
+         calibration::read_target_csv(spec.reference_records, {}, spec.scene_gauges, spec.window_start_s,
+                                      spec.window_end_s, 1.0, "reference.records"))
+      have.insert(rec.gauge);
+    for (size_t i = 0; i < spec.gauges.size(); ++i)
+      if (!have.count(spec.gauges[i]))
+        throw fail(
+            "outputs.gauges." + std::to_string(i),
+            "'" + spec.gauges[i] + "' has no column in the reference record " + spec.reference_records);
+  } else {
+    throw fail("reference." + ref.begin().key(), "unknown field (known: setting, records)");
+  }
+  return spec;
+}
+
+TradeoffSpec load_tradeoff_spec(const std::string& file) {
+  std::ifstream in(file);
+  if (!in) throw InputError(file, "", "cannot open the study spec");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return parse_tradeoff_spec(ss.str(), file, fs::path(file).parent_path().string());
+}
+
+namespace {
+
+Series read_gauge(const std::string& h5, const std::string& name) {
+  Series s;
+  s.time = h5::read_vector(h5, "/gauges/" + name + "/time");
+  s.value = h5::read_vector(h5, "/gauges/" + name + "/elevation");
+  return s;
+}
+
+// Peak magnitude of a load cell's force in the window.
+double load_peak(const std::string& h5, const std::string& name, double t0, double t1) {
+  h5::Reader r(h5);
+  const auto t = r.read_vector("/loads/" + name + "/time");
+  const auto f = r.read_vector("/loads/" + name + "/force");
+  const size_t cols = t.empty() ? 1 : f.size() / t.size();
+  double peak = 0;
+  for (size_t i = 0; i < t.size(); ++i) {
+    if (t[i] < t0 || t[i] > t1) continue;
+    double m2 = 0;
+    for (size_t c = 0; c < cols; ++c) m2 += f[i * cols + c] * f[i * cols + c];
+    if (std::isfinite(m2)) peak = std::max(peak, std::sqrt(m2));
+  }
+  return peak;
+}
+
+std::string changes_of(const campaigns::CampaignSpec& c, size_t k) {
+  std::string s;
+  for (size_t j = 0; j < c.parameters.size(); ++j) {
+    if (!campaigns::has_value(c, k, j)) continue;
+    std::string v = campaigns::value_json(c.parameters[j], c.points.values[k][j]);
+    const json value = json::parse(v);
+    if (value.is_string())
+      v = c.parameters[j].path == campaigns::kScenePath ? fs::path(value.get<std::string>()).stem().string()
+                                                        : value.get<std::string>();
+    else
+      v = num(value.get<double>(), 6);  // 2e+07, not 20000000.0
+    s += (s.empty() ? "" : ", ") + c.parameters[j].path + "=" + v;
+  }
+  return s.empty() ? "(scene as is)" : s;
+}
+
+}  // namespace
+
+TradeoffResult evaluate_tradeoff(const TradeoffSpec& spec, const std::string& db_file) {
+  const auto& c = spec.campaign;
+  store::CampaignStore db(db_file, true);
+  const auto campaign = db.find_campaign(c.name);
+  if (!campaign) throw InputError(db_file, "", "no campaign named '" + c.name + "' (run the study first)");
+  const auto planned = campaigns::plan_runs(c);
+  TradeoffResult result;
+  std::vector<std::string> h5(planned.size());
+  for (size_t k = 0; k < planned.size(); ++k) {
+    SettingResult r;
+    r.label = spec.labels[k];
+    r.changes = changes_of(c, k);
+    r.reference = spec.reference_setting && *spec.reference_setting == k;
+    const auto stored = db.find_run(campaign->id, planned[k].param_hash);
+    if (stored) {
+      r.run_id = stored->id;
+      r.status = stored->status;
+      r.message = stored->message;
+      r.wall_s = stored->wall_s;
+      if (r.status == store::RunStatus::kOk && !stored->h5_path.empty() && fs::exists(stored->h5_path))
+        h5[k] = stored->h5_path;
+      std::ifstream in(fs::path(stored->run_dir) / "run.json");
+      if (in) {
+        try {
+          const json j = json::parse(in);
+          const json& cost = j.at("cost");
+          r.steps = cost.value("steps", -1LL);
+          r.particles = cost.value("particles", -1LL);
+          r.peak_rss_mb = cost.value("peak_rss_mb", NAN);
+          if (r.steps >= 0 && r.particles >= 0) r.particle_steps = double(r.steps) * double(r.particles);
+        } catch (const std::exception&) {
+          // a run killed while writing run.json: its cost stays unknown
+        }
+      }
+    }
+    result.rows.push_back(r);
+  }
+
+  // The reference's series.
+  std::map<std::string, Series> ref_gauges;
+  std::map<std::string, double> ref_loads;
+  if (spec.reference_setting) {
+    const size_t k = *spec.reference_setting;
+    const auto& r = result.rows[k];
+    if (h5[k].empty())
+      throw InputError(spec.file, "reference.setting",
+                       "the reference '" + r.label + "' has no result (status " + store::to_string(r.status) +
+                           (r.message.empty() ? "" : ": " + r.message) + "); errors need it");
+    for (const auto& g : spec.gauges) ref_gauges[g] = read_gauge(h5[k], g);
+    for (const auto& l : spec.loads)
+      ref_loads[l] = load_peak(h5[k], l, spec.window_start_s, spec.window_end_s);
+    result.reference = "setting '" + r.label + "' (" + r.changes + ")";
+  } else {
+    for (const auto& rec :
+         calibration::read_target_csv(spec.reference_records, {}, spec.scene_gauges, spec.window_start_s,
+                                      spec.window_end_s, 1.0, "reference.records"))
+      ref_gauges[rec.gauge] = {rec.time, rec.elevation};
+    result.reference = "measured record " + spec.reference_records;
+  }
+
+  std::vector<double> cost;
+  std::vector<double> errors[3];
+  for (size_t k = 0; k < result.rows.size(); ++k) {
+    auto& r = result.rows[k];
+    if (!h5[k].empty()) {
+      double sum[3] = {0, 0, 0};
+      int n[3] = {0, 0, 0};
+      auto add = [&](int m, double v) {
+        if (std::isfinite(v)) sum[m] += v, ++n[m];
+      };
+      for (const auto& g : spec.gauges) {
+        const Series sim = read_gauge(h5[k], g);
+        const Series& ref = ref_gauges.at(g);
+        GaugeError e =
+            compare_gauge(g, sim, ref, spec.window_start_s, spec.window_end_s, spec.arrival_threshold_m);
+        if (spec.front_s > 0) {
+          // The RMS around the reference's front only; where it never arrived, over the whole window.
+          const double a = e.ref_arrival_s;
+          if (std::isfinite(a)) {
+            e.rms_m = rms_difference(sim, ref, std::max(spec.window_start_s, a - spec.front_s / 4),
+                                     std::min(spec.window_end_s, a + spec.front_s));
+            e.rms_rel = e.rms_m / std::fabs(e.ref_peak_m);
+          }
+        }
+        add(kRms, e.rms_rel);
+        add(kPeak, std::fabs(e.peak_rel));
+        if (std::isfinite(e.arrival_diff_s))
+          add(kArrival, std::fabs(e.arrival_diff_s));
+        else if (std::isfinite(e.arrival_s) != std::isfinite(e.ref_arrival_s))
+          add(kArrival, spec.window_end_s - (std::isfinite(e.arrival_s) ? e.arrival_s : e.ref_arrival_s));
+        else if (!std::isfinite(e.arrival_s))
+          add(kArrival, 0.0);  // neither arrived: they agree
+        r.gauges.push_back(e);
+      }
+      for (const auto& l : spec.loads) {
+        LoadError e{l, load_peak(h5[k], l, spec.window_start_s, spec.window_end_s), ref_loads.at(l), 0};
+        e.peak_rel = (e.peak_n - e.ref_peak_n) / std::fabs(e.ref_peak_n);
+        r.loads.push_back(e);
+        add(kPeak, std::fabs(e.peak_rel));
+      }
+      for (int m = 0; m < 3; ++m) r.error[m] = n[m] ? sum[m] / n[m] : NAN;
+    }
+    // The reference setting is exact by definition: it is shown, not ranked.
+    cost.push_back(r.reference ? NAN : r.wall_s);
+    for (int m = 0; m < 3; ++m) errors[m].push_back(r.reference ? NAN : r.error[m]);
+  }
+  for (int m = 0; m < 3; ++m) {
+    const auto front = pareto_front(cost, errors[m]);
+    for (size_t k = 0; k < front.size(); ++k) result.rows[k].pareto[m] = front[k];
+  }
+  return result;
+}
+
+void store_errors(const TradeoffResult& result, const std::string& db_file) {
+  store::CampaignStore db(db_file);
+  for (const auto& r : result.rows) {
+    if (r.run_id == 0 || r.status != store::RunStatus::kOk) continue;
+    std::vector<std::pair<std::string, double>> m;
+    for (int k = 0; k < 3; ++k) {
+      const std::string name = std::string("error.") + kErrorNames[k] + (k == kArrival ? "_s" : "");
+      m.emplace_back(name, r.reference ? 0.0 : r.error[k]);
+      m.emplace_back(std::string("pareto.") + kErrorNames[k], r.pareto[k] ? 1.0 : 0.0);
+    }
+    for (const auto& g : r.gauges) {
+      m.emplace_back("error." + g.name + ".rms_m", g.rms_m);
+      m.emplace_back("error." + g.name + ".peak_rel", g.peak_rel);
+      m.emplace_back("error." + g.name + ".arrival_diff_s", g.arrival_diff_s);
+    }
+    for (const auto& l : r.loads) m.emplace_back("error." + l.name + ".peak_rel", l.peak_rel);
+    db.record_metrics(r.run_id, m);
+  }
+}
+
+std::string tradeoff_markdown(const TradeoffSpec& spec, const TradeoffResult& result) {
+  std::ostringstream md;
+  md << "Errors against the " << result.reference << ", over t = " << num(spec.window_start_s) << " to "
+     << num(spec.window_end_s) << " s"
+     << (spec.front_s > 0 ? ", RMS from " + num(spec.front_s / 4) + " s before to " + num(spec.front_s) +
+                                " s after the reference's arrival at each gauge"
+                          : std::string())
+     << ". `rms`: mean over gauges of RMS(difference) / reference peak; `peak`: mean of |peak error| / "
+        "reference peak (gauges and load cells); `arrival`: mean |arrival difference| (s; where only one "
+        "arrived, the time from its arrival to the window's end). Pareto: the settings on the front of that "
+        "error against wall time.\n\n";
+  md << "| setting | changes | status | wall s | particle-steps | peak RSS MB | rms | peak | arrival s | "
+        "Pareto |\n";
+  md << "|---|---|---|---|---|---|---|---|---|---|\n";
+  for (const auto& r : result.rows) {
+    std::string front;
+    for (int m = 0; m < 3; ++m)
+      if (r.pareto[m]) front += (front.empty() ? "" : ", ") + std::string(kErrorNames[m]);
+    md << "| " << r.label << (r.reference ? " (reference)" : "") << " | " << r.changes << " | "
+       << store::to_string(r.status) << " | " << fixed(r.wall_s, 1) << " | " << num(r.particle_steps) << " | "
+       << fixed(r.peak_rss_mb, 0);
+    for (int m = 0; m < 3; ++m) md << " | " << (r.reference ? "0" : num(r.error[m], 2));
+    md << " | " << front << " |\n";
+  }
+  if (!spec.gauges.empty()) {
+    md << "\nPer gauge: RMS error (mm) / peak error (%) / arrival difference (s)\n\n| setting |";
+    for (const auto& g : spec.gauges) md << " " << g << " |";
+    md << "\n|---|";
+    for (size_t i = 0; i < spec.gauges.size(); ++i) md << "---|";
+    md << "\n";
+    for (const auto& r : result.rows) {
+      if (r.gauges.empty() || r.reference) continue;
+      md << "| " << r.label << " |";
+      for (const auto& g : r.gauges)
+        md << " " << fixed(1e3 * g.rms_m, 1) << " / " << fixed(100 * g.peak_rel, 0) << " / "
+           << (std::isfinite(g.arrival_diff_s)
+                   ? fixed(g.arrival_diff_s, 2)
+                   : std::string(std::isfinite(g.arrival_s) || std::isfinite(g.ref_arrival_s) ? "one arrived"
+                                                                                              : "-"))
+           << " |";
+      md << "\n";
+    }
+  }
+  if (!spec.loads.empty()) {
+    md << "\nPer load cell: peak force (N) / its error (%)\n\n| setting |";
+    for (const auto& l : spec.loads) md << " " << l << " |";
+    md << "\n|---|";
+    for (size_t i = 0; i < spec.loads.size(); ++i) md << "---|";
+    md << "\n";
+    for (const auto& r : result.rows) {
+      if (r.loads.empty()) continue;
+      md << "| " << r.label << " |";
+      for (const auto& l : r.loads) md << " " << num(l.peak_n) << " / " << fixed(100 * l.peak_rel, 0) << " |";
+      md << "\n";
+    }
+  }
+  bool any_failed = false;
+  for (const auto& r : result.rows)
+    if (r.status != store::RunStatus::kOk) {
+      if (!any_failed) md << "\nRuns without a result:\n\n";
+      any_failed = true;
+      md << "- " << r.label << ": " << store::to_string(r.status)
+         << (r.message.empty() ? "" : ": " + r.message) << "\n";
+    }
+  return md.str();
+}
+
+void write_tradeoff(const TradeoffSpec& spec, const TradeoffResult& result, const std::string& out_dir) {
+  std::error_code ec;
+  fs::create_directories(out_dir, ec);
+  if (ec) throw InputError(out_dir, "--out", "cannot create the output directory: " + ec.message());
+  {
+    std::ofstream md(fs::path(out_dir) / "tradeoff.md");
+    md << "# Trade-off study '" << spec.campaign.name << "'\n\n"
+       << tradeoff_markdown(spec, result) << "\n![error against wall time](tradeoff.svg)\n";
+    if (!md) throw InputError(out_dir, "--out", "cannot write tradeoff.md");
+  }
+  {
+    std::ofstream csv(fs::path(out_dir) / "tradeoff.csv");
+    auto q = [](const std::string& s) {
+      std::string o = "\"";
+      for (char ch : s) o += ch == '"' ? std::string("\"\"") : std::string(1, ch);
+      return o + "\"";
+    };
+    auto v = [](double x) { return std::isfinite(x) ? num(x, 10) : std::string(); };
+    csv << "label,changes,status,reference,wall_s,steps,particles,particle_steps,peak_rss_mb,error_rms,error_"
+           "peak,"
+           "error_arrival_s,pareto_rms,pareto_peak,pareto_arrival";
+    for (const auto& g : spec.gauges)
+      csv << "," << g << ".rms_m," << g << ".peak_m," << g << ".peak_rel," << g << ".arrival_s," << g
+          << ".arrival_diff_s";
+    for (const auto& l : spec.loads) csv << "," << l << ".peak_n," << l << ".peak_rel";
+    csv << "\n";
+    for (const auto& r : result.rows) {
+      csv << q(r.label) << "," << q(r.changes) << "," << store::to_string(r.status) << "," << r.reference
+          << "," << v(r.wall_s) << "," << (r.steps >= 0 ? std::to_string(r.steps) : "") << ","
+          << (r.particles >= 0 ? std::to_string(r.particles) : "") << "," << v(r.particle_steps) << ","
+          << v(r.peak_rss_mb) << "," << v(r.error[kRms]) << "," << v(r.error[kPeak]) << ","
+          << v(r.error[kArrival]) << "," << r.pareto[kRms] << "," << r.pareto[kPeak] << ","
+          << r.pareto[kArrival];
+      for (size_t i = 0; i < spec.gauges.size(); ++i) {
+        if (i < r.gauges.size()) {
+          const auto& g = r.gauges[i];
+          csv << "," << v(g.rms_m) << "," << v(g.peak_m) << "," << v(g.peak_rel) << "," << v(g.arrival_s)
+              << "," << v(g.arrival_diff_s);
+        } else {
+          csv << ",,,,,";
+        }
+      }
+      for (size_t i = 0; i < spec.loads.size(); ++i) {
+        if (i < r.loads.size())
+          csv << "," << v(r.loads[i].peak_n) << "," << v(r.loads[i].peak_rel);
+        else
+          csv << ",,";
+      }
+      csv << "\n";
+    }
+    if (!csv) throw InputError(out_dir, "--out", "cannot write tradeoff.csv");
+  }
+  // Each error against wall time, on log axes; the front joined and ringed.
+  plot::Figure fig(1, 3, 1500, 500);
+  fig.title("'" + spec.campaign.name + "': error against cost (vs " + result.reference + ")");
+  static const char* kYLabels[3] = {"RMS error / ref. peak", "|peak error| / ref. peak",
+                                    "|arrival error| [s]"};
+  for (int m = 0; m < 3; ++m) {
+    auto& ax = fig.axes(0, m);
+    ax.xlabel("wall time [s]")
+        .ylabel(kYLabels[m])
+        .xscale(plot::Scale::kLog)
+        .yscale(plot::Scale::kLog)
+        .grid(true);
+    std::vector<double> x, y, fx, fy;
+    std::vector<std::pair<double, double>> front;
+    for (const auto& r : result.rows) {
+      // A zero error has no place on a log axis: it is in the table.
+      if (r.reference || !(r.wall_s > 0) || !std::isfinite(r.wall_s) || !(r.error[m] > 0) ||
+          !std::isfinite(r.error[m]))
+        continue;
+      x.push_back(r.wall_s);
+      y.push_back(r.error[m]);
+      if (r.pareto[m]) front.emplace_back(r.wall_s, r.error[m]);
+    }
+    if (x.empty()) continue;
+    std::sort(front.begin(), front.end());
+    for (const auto& [a, b] : front) fx.push_back(a), fy.push_back(b);
+    plot::MarkerStyle all;
+    all.label = "settings";
+    all.size = 7;
+    ax.scatter(x, y, all);
+    plot::LineStyle line;
+    line.label = "Pareto front";
+    line.dash = plot::Dash::kDashed;
+    ax.line(fx, fy, line);
+    plot::MarkerStyle ring;
+    ring.marker = plot::Marker::kDiamond;
+    ring.size = 12;
+    ring.opacity = 0.6;
+    ax.scatter(fx, fy, ring);
+    for (const auto& r : result.rows)
+      if (!r.reference && r.error[m] > 0 && std::isfinite(r.error[m]) && r.wall_s > 0) {
+        plot::TextStyle t;
+        t.size = 9;
+        ax.text(r.wall_s * 1.06, r.error[m], r.label, t);
+      }
+    ax.legend(plot::Legend::kUpperRight);
+  }
+  fig.save((fs::path(out_dir) / "tradeoff.svg").string());
+}
+
+int study_main(int argc, char** argv) {
+  static const char* kUsage =
+      "usage:\n"
+      "  flume study tradeoff SPEC.json --db FILE [--out DIR] [--workers N]\n"
+      "      runs (or resumes) every setting as a campaign in FILE, then writes DIR/tradeoff.{md,csv,svg}\n"
+      "      (DIR: FILE.study/<name> by default)\n";
+  if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h")) {
+    std::fputs(kUsage, argc < 2 ? stderr : stdout);
+    return argc < 2 ? kExitInvalidInput : kExitOk;
+  }
+  try {
+    if (std::string(argv[1]) != "tradeoff")
+      throw InputError("command line", argv[1], std::string("unknown study (known: tradeoff)\n") + kUsage);
+    std::string spec_file, db, out;
+    int workers = 1;
+    for (int i = 2; i < argc; ++i) {
+      const std::string a = argv[i];
+      auto value = [&]() -> std::string {
+        if (i + 1 >= argc) throw InputError("command line", a, "needs a value");
+        return argv[++i];
+      };
+      if (a == "--db") {
+        db = value();
+      } else if (a == "--out") {
+        out = value();
+      } else if (a == "--workers") {
+        const std::string v = value();
+        char* end = nullptr;
+        const long n = std::strtol(v.c_str(), &end, 10);
+        if (*end || n < 1 || n > 4096)
+          throw InputError("command line", "--workers", "must be an integer in [1, 4096] (got '" + v + "')");
+        workers = static_cast<int>(n);
+      } else if (!a.empty() && a[0] == '-') {
+        throw InputError("command line", a, "unknown option");
+      } else if (spec_file.empty()) {
+        spec_file = a;
+      } else {
+        throw InputError("command line", a, "one study spec only");
+      }
+    }
+    if (spec_file.empty()) throw InputError("command line", "SPEC", "is required (the study spec file)");
+    if (db.empty()) throw InputError("command line", "--db", "is required (the campaign database file)");
+    const TradeoffSpec spec = load_tradeoff_spec(spec_file);
+    if (out.empty()) out = (fs::path(db + ".study") / spec.campaign.name).string();
+    campaigns::EngineOptions opt;
+    opt.db_file = db;
+    opt.local_workers = workers;
+    opt.terminal = isatty(STDERR_FILENO);
+    const int rc = campaigns::run_campaign(spec.campaign, opt, 1);
+    if (rc != kExitOk) return rc;
+    const TradeoffResult result = evaluate_tradeoff(spec, db);
+    store_errors(result, db);
+    write_tradeoff(spec, result, out);
+    std::printf("%s\nwrote %s/tradeoff.{md,csv,svg}\n", tradeoff_markdown(spec, result).c_str(), out.c_str());
+    return kExitOk;
+  } catch (const InputError& e) {
+    std::fprintf(stderr, "%s\n", e.what());
+    return kExitInvalidInput;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "flume study: %s\n", e.what());
+    return kExitInternal;
+  }
+}
+
+}  // namespace flume::study

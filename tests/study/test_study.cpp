@@ -1,0 +1,271 @@
+// The trade-off study's own parts: error metrics on synthetic series with a known answer, the Pareto front,
+// spec validation (errors name the file and the field), the campaign `list` design it runs through, and one
+// small study end to end through `flume study tradeoff`, a variant scene file included.
+#include <gtest/gtest.h>
+#include <sqlite3.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "campaigns/engine.h"
+#include "campaigns/spec.h"
+#include "common/errors.h"
+#include "study/compare.h"
+#include "study/tradeoff.h"
+#include "xml_check.h"
+
+namespace flume::study {
+namespace {
+
+namespace fs = std::filesystem;
+const double kPi = std::acos(-1.0);
+
+Series sampled(double dt, double t1, double (*f)(double)) {
+  Series s;
+  for (int i = 0; i * dt <= t1 + 1e-12; ++i) {
+    s.time.push_back(i * dt);
+    s.value.push_back(f(i * dt));
+  }
+  return s;
+}
+
+// sin against sin shifted by a constant: the RMS of a constant offset is the offset, whatever the grids.
+TEST(Compare, RmsOfAConstantOffsetIsTheOffset) {
+  const Series ref = sampled(0.01, 2.0, [](double t) { return std::sin(2 * kPi * t); });
+  // The run sampled on another grid; linear in t so that interpolation is exact.
+  const Series sim = sampled(0.0037, 2.0, [](double t) { return 0.3 * t + 0.05; });
+  const Series lin = sampled(0.01, 2.0, [](double t) { return 0.3 * t; });
+  EXPECT_NEAR(rms_difference(sim, lin, 0.0, 2.0), 0.05, 1e-12);
+  // sin(2 pi t) against 0 over whole periods: RMS = 1 / sqrt(2).
+  const Series zero = sampled(0.003, 2.0, [](double) { return 0.0; });
+  EXPECT_NEAR(rms_difference(zero, ref, 0.0, 2.0), 1.0 / std::sqrt(2.0), 1e-3);
+  // The window: only [0.5, 1.0] of ref, and the run's span limits it too.
+  EXPECT_NEAR(rms_difference(zero, ref, 0.5, 1.0), 1.0 / std::sqrt(2.0), 2e-2);
+  EXPECT_TRUE(std::isnan(rms_difference(zero, ref, 3.0, 4.0)));
+}
+
+TEST(Compare, NaNSamplesAreLeftOut) {
+  Series ref = sampled(0.1, 1.0, [](double) { return 1.0; });
+  Series sim = sampled(0.1, 1.0, [](double) { return 1.5; });
+  sim.value[3] = std::nan("");  // a dry gauge: no reading
+  EXPECT_NEAR(rms_difference(sim, ref, 0, 1), 0.5, 1e-12);
+  EXPECT_NEAR(peak_in(sim, 0, 1), 1.5, 0);
+}
+
+TEST(Compare, PeakAndArrival) {
+  // A bump of height 0.2 at t = 1 on a dry apron 0.025 m above the datum.
+  auto bump = [](double t) { return 0.025 + 0.2 * std::exp(-std::pow((t - 1.0) / 0.1, 2)); };
+  const Series ref = sampled(0.001, 2.0, bump);
+  const Series late =
+      sampled(0.001, 2.0, [](double t) { return 0.025 + 0.1 * std::exp(-std::pow((t - 1.1) / 0.1, 2)); });
+  const GaugeError e = compare_gauge("WG3", late, ref, 0.0, 2.0, 0.005);
+  EXPECT_NEAR(e.ref_peak_m, 0.225, 1e-6);
+  EXPECT_NEAR(e.peak_m, 0.125, 1e-6);
+  EXPECT_NEAR(e.peak_rel, (0.125 - 0.225) / 0.225, 1e-6);
+  // Arrival: 0.2 exp(-((t - 1) / 0.1)^2) = 0.005 -> t = 1 - 0.1 sqrt(ln 40); the late one: 0.1 -> ln 20, +
+  // 0.1.
+  EXPECT_NEAR(e.ref_arrival_s, 1.0 - 0.1 * std::sqrt(std::log(40.0)), 1e-3);
+  EXPECT_NEAR(e.arrival_s, 1.1 - 0.1 * std::sqrt(std::log(20.0)), 1e-3);
+  EXPECT_NEAR(e.arrival_diff_s, e.arrival_s - e.ref_arrival_s, 1e-12);
+  // Never arriving: NaN, and so is the difference.
+  const Series flat = sampled(0.01, 2.0, [](double) { return 0.025; });
+  const GaugeError none = compare_gauge("WG3", flat, ref, 0.0, 2.0, 0.005);
+  EXPECT_TRUE(std::isnan(none.arrival_s));
+  EXPECT_TRUE(std::isnan(none.arrival_diff_s));
+}
+
+TEST(Pareto, FrontIsTheNonDominatedSet) {
+  //            a    b    c    d    e     f (NaN error: a failed run)
+  const std::vector<double> cost = {1, 2, 3, 4, 2, 0.5};
+  const std::vector<double> err = {0.5, 0.3, 0.3, 0.1, 0.6, std::nan("")};
+  const auto front = pareto_front(cost, err);
+  // b dominates c (same error, cheaper) and e; a, b, d are on the front; f is never.
+  EXPECT_EQ(front, (std::vector<bool>{true, true, false, true, false, false}));
+  // Ties: two identical points do not dominate each other.
+  EXPECT_EQ(pareto_front({1, 1}, {0.2, 0.2}), (std::vector<bool>{true, true}));
+}
+
+const std::string kSrc = FLUME_SOURCE_DIR;
+
+std::string base_spec(const std::string& settings, const std::string& extra = "") {
+  return R"({"name": "t", "scene": ")" + kSrc + R"(/scenes/waseda/waseda_2d.json",
+    "overrides": {"solver.end_time": 0.2}, "settings": )" +
+         settings + R"(, "reference": {"setting": "fine"})" + extra + "}";
+}
+
+void expect_error(const std::string& text, const std::string& field, const std::string& words) {
+  try {
+    parse_tradeoff_spec(text, "study.json", "");
+    FAIL() << "accepted; expected an error at " << field;
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file(), "study.json");
+    EXPECT_EQ(e.field(), field) << e.what();
+    EXPECT_NE(std::string(e.what()).find(words), std::string::npos) << e.what();
+  }
+}
+
+TEST(TradeoffSpec, ErrorsNameTheFileTheFieldAndWhatIsAllowed) {
+  const std::string two = R"([{"label": "fine", "solver.dx": 0.02}, {"label": "coarse", "solver.dx": 0.04}])";
+  EXPECT_NO_THROW(parse_tradeoff_spec(base_spec(two), "study.json", ""));
+  // A value out of the scene's range: the setting's path, and the range.
+  expect_error(base_spec(R"([{"label": "fine", "solver.dx": 0.02}, {"label": "bad", "solver.cfl": -1}])"),
+               "settings.1.solver.cfl", "must be in (0, 10]");
+  // A path the scene does not have.
+  expect_error(base_spec(R"([{"label": "fine", "solver.dx": 0.02}, {"label": "typo", "solver.dxx": 0.04}])"),
+               "settings.1.solver.dxx", "unknown field");
+  // A variant scene file that does not exist.
+  expect_error(base_spec(R"([{"label": "fine", "solver.dx": 0.02}, {"label": "v", "scene": "nope.json"}])"),
+               "settings.1.scene", "cannot open");
+  // Labels: required, unique; the reference must be one of them.
+  expect_error(base_spec(R"([{"label": "fine", "solver.dx": 0.02}, {"solver.dx": 0.04}])"),
+               "settings.1.label", "is required");
+  expect_error(base_spec(R"([{"label": "fine", "solver.dx": 0.02}, {"label": "fine", "solver.dx": 0.04}])"),
+               "settings.1.label", "already the label");
+  expect_error(R"({"name": "t", "scene": ")" + kSrc + R"(/scenes/waseda/waseda_2d.json", "settings": )" +
+                   two + R"(, "reference": {"setting": "finest"}})",
+               "reference.setting", "not the label");
+  // Outputs: names the scene has, a window that makes sense.
+  expect_error(base_spec(two, R"(, "outputs": {"gauges": ["WG9"]})"), "outputs.gauges.0",
+               "WG1, WG2, WG3, WG4");
+  expect_error(base_spec(two, R"(, "outputs": {"window_s": [2, 1]})"), "outputs.window_s", "0 <= t0 < t1");
+  expect_error(base_spec(two, R"(, "outptus": {})"), "outptus", "unknown field");
+  expect_error(base_spec(R"([{"label": "fine"}])"), "settings", "at least two");
+}
+
+TEST(ListDesign, PointsBecomeChoiceParametersAndAbsentPathsKeepTheScene) {
+  const std::string text = R"({"name": "l", "scene": ")" + kSrc + R"(/scenes/waseda/waseda_2d.json",
+    "overrides": {"solver.end_time": 0.1},
+    "design": {"type": "list", "points": [
+      {"label": "a", "solver.dx": 0.04},
+      {"label": "b", "solver.dx": 0.02, "solver.precision": "double"},
+      {"label": "c", "scene": ")" +
+                           kSrc + R"(/scenes/waseda/waseda_3d_half.json", "solver.dx": 0.04}]}})";
+  const campaigns::CampaignSpec spec = campaigns::parse_campaign_spec(text, "list.json", "");
+  ASSERT_TRUE(spec.listed);
+  ASSERT_EQ(spec.parameters.size(), 3u);  // solver.dx, solver.precision, scene (in order of appearance)
+  EXPECT_EQ(spec.point_labels, (std::vector<std::string>{"a", "b", "c"}));
+  EXPECT_NE(spec.point_scenes[2].find("waseda_3d_half.json"), std::string::npos);
+  const auto argv_a = campaigns::run_command(spec, 0, "flume", "out");
+  const auto argv_c = campaigns::run_command(spec, 2, "flume", "out");
+  auto joined = [](const std::vector<std::string>& v) {
+    std::string s;
+    for (const auto& x : v) s += x + " ";
+    return s;
+  };
+  EXPECT_NE(joined(argv_a).find("--set solver.dx=0.04"), std::string::npos) << joined(argv_a);
+  EXPECT_EQ(joined(argv_a).find("precision"), std::string::npos) << joined(argv_a);  // left to the scene
+  EXPECT_NE(argv_c[2].find("waseda_3d_half.json"), std::string::npos) << joined(argv_c);
+  EXPECT_EQ(joined(argv_c).find("--set scene="), std::string::npos) << joined(argv_c);
+  // Distinct points, distinct hashes; the same point twice would share one.
+  const auto planned = campaigns::plan_runs(spec);
+  EXPECT_NE(planned[0].param_hash, planned[1].param_hash);
+  EXPECT_NE(planned[0].param_hash, planned[2].param_hash);
+  EXPECT_EQ(planned[0].params_json, R"({"solver.dx":0.04})");
+}
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+// End to end, 0.3 s on coarse grids (a few seconds): three 2D settings and the 3D half-basin as a variant
+// file.
+TEST(TradeoffCli, RunsResumesAndWritesTableCsvAndPlot) {
+  const fs::path dir = fs::path(FLUME_TEST_OUT) / "cli";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string spec = R"({"name": "mini", "scene": ")" + kSrc + R"(/scenes/waseda/waseda_2d.json",
+    "overrides": {"solver.end_time": 0.3, "reservoir.forcing.t99_s": 0.1},
+    "settings": [{"label": "fine", "solver.dx": 0.03}, {"label": "coarse", "solver.dx": 0.05},
+                 {"label": "coarse cfl 0.8", "solver.dx": 0.05, "solver.cfl": 0.8},
+                 {"label": "3D half", "scene": ")" +
+                           kSrc + R"(/scenes/waseda/waseda_3d_half.json", "solver.dx": 0.1}],
+    "reference": {"setting": "fine"}, "outputs": {"gauges": ["WG1", "WG2"], "window_s": [0, 0.3]},
+    "run": {"time_limit_s": 120, "threads": 1}})";
+  std::ofstream(dir / "spec.json") << spec;
+  const std::string cmd = std::string(FLUME_EXE) + " study tradeoff " + (dir / "spec.json").string() +
+                          " --db " + (dir / "s.sqlite").string() + " --out " + (dir / "out").string() +
+                          " > " + (dir / "log.txt").string() + " 2>&1";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << slurp(dir / "log.txt");
+  const std::string md = slurp(dir / "out" / "tradeoff.md");
+  EXPECT_NE(md.find("| coarse | solver.dx=0.05 | ok |"), std::string::npos) << md;
+  EXPECT_NE(md.find("fine (reference)"), std::string::npos) << md;
+  EXPECT_NE(md.find("| 3D half |"), std::string::npos) << md;
+  const std::string csv = slurp(dir / "out" / "tradeoff.csv");
+  EXPECT_NE(csv.find("WG1.rms_m"), std::string::npos);
+  EXPECT_EQ(csv.find("nan"), std::string::npos) << csv;
+  const std::string svg = slurp(dir / "out" / "tradeoff.svg");
+  EXPECT_EQ(svg.rfind("<svg", 0), 0u);
+  EXPECT_NE(svg.find("Pareto front"), std::string::npos);
+  EXPECT_EQ(plot::test::check_xml(svg).error, "") << "tradeoff.svg is not well-formed XML";
+  // Again: nothing reruns (the store has every run), and the same table comes out.
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << slurp(dir / "log.txt");
+  EXPECT_NE(slurp(dir / "log.txt").find("4 finished, 0 to run"), std::string::npos) << slurp(dir / "log.txt");
+  EXPECT_EQ(slurp(dir / "out" / "tradeoff.md"), md);
+  // The runs are a campaign: one row per setting in its store.
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open((dir / "s.sqlite").string().c_str(), &db), SQLITE_OK);
+  sqlite3_stmt* st = nullptr;
+  sqlite3_prepare_v2(db, "SELECT count(*) FROM runs WHERE status = 'ok'", -1, &st, nullptr);
+  ASSERT_EQ(sqlite3_step(st), SQLITE_ROW);
+  EXPECT_EQ(sqlite3_column_int(st, 0), 4);
+  sqlite3_finalize(st);
+  // The errors are stored beside the cost: every ok run has error.peak (0 for the reference) and no NaN.
+  sqlite3_prepare_v2(db, "SELECT count(*), sum(value IS NULL) FROM metrics WHERE name = 'error.peak'", -1,
+                     &st, nullptr);
+  ASSERT_EQ(sqlite3_step(st), SQLITE_ROW);
+  EXPECT_EQ(sqlite3_column_int(st, 0), 4);
+  EXPECT_EQ(sqlite3_column_int(st, 1), 0);
+  sqlite3_finalize(st);
+  sqlite3_close(db);
+  // A measured record as the reference: the fine run's gauges as a CSV, and the coarse setting against it
+  // gives the errors it had against the fine setting.
+  const std::string target = std::string(FLUME_EXE) + " calibrate target " +
+                             (dir / "s.sqlite.runs" / "mini" / "run-000000" / "result.h5").string() +
+                             " --out " + (dir / "fine.csv").string() + " > /dev/null 2>&1";
+  ASSERT_EQ(std::system(target.c_str()), 0);
+  std::ofstream(dir / "records.json") << R"({"name": "mini-records", "scene": ")" + kSrc +
+                                             R"(/scenes/waseda/waseda_2d.json",
+    "overrides": {"solver.end_time": 0.3, "reservoir.forcing.t99_s": 0.1},
+    "settings": [{"label": "coarse", "solver.dx": 0.05}, {"label": "coarse cfl 0.8", "solver.dx": 0.05, "solver.cfl": 0.8}],
+    "reference": {"records": "fine.csv"}, "outputs": {"gauges": ["WG1", "WG2"], "window_s": [0, 0.3]},
+    "run": {"threads": 1}})";
+  const std::string rec = std::string(FLUME_EXE) + " study tradeoff " + (dir / "records.json").string() +
+                          " --db " + (dir / "s.sqlite").string() + " --out " +
+                          (dir / "out-records").string() + " > " + (dir / "log.txt").string() + " 2>&1";
+  ASSERT_EQ(std::system(rec.c_str()), 0) << slurp(dir / "log.txt");
+  auto row_of = [](const std::string& csv, const std::string& label) {
+    const auto at = csv.find("\n\"" + label + "\",");
+    return at == std::string::npos ? std::string() : csv.substr(at + 1, csv.find('\n', at + 1) - at - 1);
+  };
+  const std::string csv_rec = slurp(dir / "out-records" / "tradeoff.csv");
+  // Same columns after the label and changes; the error columns agree (the CSV keeps 10 digits of both).
+  auto errors = [](const std::string& row) {
+    std::vector<std::string> cells;
+    std::stringstream ss(row);
+    for (std::string c; std::getline(ss, c, ',');) cells.push_back(c);
+    return cells.size() > 11 ? cells[10] + "," + cells[11] : std::string("?");  // error_peak, error_arrival_s
+  };
+  EXPECT_EQ(errors(row_of(csv_rec, "coarse")), errors(row_of(csv, "coarse"))) << csv_rec << "\n" << csv;
+  EXPECT_NE(slurp(dir / "out-records" / "tradeoff.md").find("measured record"), std::string::npos);
+
+  // A bad spec: exit 2 and the field named.
+  std::ofstream(dir / "bad.json") << R"({"name": "bad", "scene": ")" + kSrc +
+                                         R"(/scenes/waseda/waseda_2d.json",
+    "settings": [{"label": "a", "solver.dx": 0.04}, {"label": "b", "solver.ppc": 5}], "reference": {"setting": "a"}})";
+  const std::string bad = std::string(FLUME_EXE) + " study tradeoff " + (dir / "bad.json").string() +
+                          " --db " + (dir / "b.sqlite").string() + " 2> " + (dir / "err.txt").string();
+  const int rc = std::system(bad.c_str());
+  EXPECT_EQ(WEXITSTATUS(rc), 2);
+  EXPECT_NE(slurp(dir / "err.txt").find("settings.1.solver.ppc"), std::string::npos)
+      << slurp(dir / "err.txt");
+}
+
+}  // namespace
+}  // namespace flume::study
