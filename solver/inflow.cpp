@@ -25,14 +25,16 @@ void load_inflow_record(Scene& scene) {
     throw InputError(scene.file, field, "'" + file + "': " + what);
   };
   if (!std::ifstream(file).good())
-    bad("inflow.record", "cannot open it (a result.h5 of a run with a section instrument; a relative path is read "
-                         "from the working directory)");
+    bad("inflow.record",
+        "cannot open it (a result.h5 of a run with a section instrument; a relative path is read "
+        "from the working directory)");
   const std::string g = "/sections/" + F.section;
   try {
     h5::Reader r(file);
     if (!r.exists("/sections"))
-      bad("inflow.record", "has no /sections: it is not the result of a run with a section instrument (basin scenes "
-                           "record one, apron_inflow at x = 4.35 m)");
+      bad("inflow.record",
+          "has no /sections: it is not the result of a run with a section instrument (basin scenes "
+          "record one, apron_inflow at x = 4.35 m)");
     if (!r.exists(g)) {
       std::string names;
       for (const auto& n : r.list("/sections")) names += (names.empty() ? "" : ", ") + n;
@@ -66,30 +68,35 @@ void load_inflow_record(Scene& scene) {
     bad("inflow.record", std::string("is not a readable result file: ") + e.what());
   }
   const size_t nt = F.time.size(), nb = F.bins();
-  if (nt < 2) bad("inflow.section", g + "/time must hold at least 2 samples (got " + std::to_string(nt) + ")");
+  if (nt < 2)
+    bad("inflow.section", g + "/time must hold at least 2 samples (got " + std::to_string(nt) + ")");
   for (size_t i = 1; i < nt; ++i)
-    if (!(F.time[i] > F.time[i - 1])) bad("inflow.section", g + "/time must increase (sample " + std::to_string(i) + ")");
+    if (!(F.time[i] > F.time[i - 1]))
+      bad("inflow.section", g + "/time must increase (sample " + std::to_string(i) + ")");
   if (F.depth.size() != nt * nb || F.velocity.size() != nt * nb)
     bad("inflow.section", g + "/depth and velocity must hold time x bins = " + std::to_string(nt) + " x " +
                               std::to_string(nb) + " values");
   if (!F.z.empty()) {
     if (F.profile.size() != nt * nb * F.z.size())
-      bad("inflow.section", g + "/velocity_profile must hold time x bins x layers = " + std::to_string(nt) + " x " +
-                                std::to_string(nb) + " x " + std::to_string(F.z.size()) + " values");
+      bad("inflow.section", g + "/velocity_profile must hold time x bins x layers = " + std::to_string(nt) +
+                                " x " + std::to_string(nb) + " x " + std::to_string(F.z.size()) + " values");
     for (double u : F.profile)
       if (!std::isfinite(u)) bad("inflow.section", g + "/velocity_profile must be finite");
-    if (!(F.z.front() > F.record_floor_m)) bad("inflow.section", g + "/z must lie above the floor_m attribute");
+    if (!(F.z.front() > F.record_floor_m))
+      bad("inflow.section", g + "/z must lie above the floor_m attribute");
   }
   for (size_t i = 0; i < nt * nb; ++i) {
     if (!(std::isfinite(F.depth[i]) && F.depth[i] >= 0))
-      bad("inflow.section", g + "/depth must be finite and >= 0 (value " + std::to_string(i) + ": " + fmt(F.depth[i]) + ")");
+      bad("inflow.section",
+          g + "/depth must be finite and >= 0 (value " + std::to_string(i) + ": " + fmt(F.depth[i]) + ")");
     if (!std::isfinite(F.velocity[i]))
       bad("inflow.section", g + "/velocity must be finite (value " + std::to_string(i) + ")");
   }
   if (F.record_dimension == 3 && !(F.record_bin_width_m > 0))
     bad("inflow.section", g + " has y but no positive bin_width_m attribute");
   if (F.record_dimension == 3 && scene.dimension == 2)
-    bad("inflow.section", "is a 3D record (bins across y); a 2D scene needs a 2D record (a 3D scene takes either)");
+    bad("inflow.section",
+        "is a 3D record (bins across y); a 2D scene needs a 2D record (a 3D scene takes either)");
   if (scene.solver.end_time > F.time.back() + 1e-9)
     throw InputError(scene.file, "solver.end_time",
                      "must not exceed the inflow record's end, t = " + fmt(F.time.back()) + " s in '" + file +
@@ -125,7 +132,9 @@ Where locate(const InflowSettings& f, double t, double y) {
 InflowSample inflow_at(const InflowSettings& f, double t, double y) {
   const Where p = locate(f, t, y);
   const size_t nb = f.bins();
-  auto lerp = [&](const std::vector<double>& a) { return (1 - p.w) * a[p.i0 * nb + p.j] + p.w * a[p.i1 * nb + p.j]; };
+  auto lerp = [&](const std::vector<double>& a) {
+    return (1 - p.w) * a[p.i0 * nb + p.j] + p.w * a[p.i1 * nb + p.j];
+  };
   return {lerp(f.depth), lerp(f.velocity)};
 }
 

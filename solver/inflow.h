@@ -1,16 +1,17 @@
 // The inflow boundary (issue 3, `waseda_apron`): water enters through the vertical plane x = x_in with the
-// depth h(t, y) and depth-averaged streamwise velocity u(t, y) that a section instrument of another run recorded
-// there (solver/instruments.h, /sections/<name> in its result.h5).
+// depth h(t, y) and depth-averaged streamwise velocity u(t, y) that a section instrument of another run
+// recorded there (solver/instruments.h, /sections/<name> in its result.h5).
 //
-// How. Upstream of the plane lies a kinematic buffer, `buffer_cells` cells long (the quadratic stencil's reach
-// and more, so the water just past the plane sees a full water column behind it): a lattice at the run's
-// particle spacing s whose lines along x (one per layer r and row across) each translate downstream by
+// How. Upstream of the plane lies a kinematic buffer, `buffer_cells` cells long (the quadratic stencil's
+// reach and more, so the water just past the plane sees a full water column behind it): a lattice at the
+// run's particle spacing s whose lines along x (one per layer r and row across) each translate downstream by
 // phi(t) = integral of u(z_r) dt, the recorded velocity of their layer (the section's profile; the depth
-// average where the record has none). Every buffer particle moves at that velocity with the hydrostatic strain
-// of the recorded depth, so the buffer pushes on the water downstream with the recorded pressure. After each
-// step the buffer is put back on its lattice; a slot whose position passes x_in becomes free water when its
-// layer is wet, the top layer's wet fraction error-diffused along its line, so the mass injected follows the
-// recorded flux rho integral(u dz) dt to within one particle per line, whatever the rounding of h / s.
+// average where the record has none). Every buffer particle moves at that velocity with the hydrostatic
+// strain of the recorded depth, so the buffer pushes on the water downstream with the recorded pressure.
+// After each step the buffer is put back on its lattice; a slot whose position passes x_in becomes free water
+// when its layer is wet, the top layer's wet fraction error-diffused along its line, so the mass injected
+// follows the recorded flux rho integral(u dz) dt to within one particle per line, whatever the rounding of h
+// / s.
 //
 // Backflow. Free water that crosses the plane upstream is removed (counted as absorbed): the record already
 // holds the flux the full run sent back through this plane (the reflection from the quay wall included), so
@@ -38,11 +39,12 @@ struct InflowSample {
 // The record at time t and lateral position y: linear in time, clamped to the record's ends; across y the bin
 // that holds y (bins partition the width, so the flux is kept); a 2D record drives every y alike.
 InflowSample inflow_at(const InflowSettings& f, double t, double y);
-// The streamwise velocity `height_m` above the floor: the record's layer there when it has a profile, else the
-// depth average.
+// The streamwise velocity `height_m` above the floor: the record's layer there when it has a profile, else
+// the depth average.
 double inflow_velocity_at(const InflowSettings& f, double t, double y, double height_m);
 
-// Strain e = J - 1 of water at rest under `head_m` of water: the inverse of the Tait law (as the solver seeds it).
+// Strain e = J - 1 of water at rest under `head_m` of water: the inverse of the Tait law (as the solver seeds
+// it).
 inline double hydrostatic_strain_at(double head_m, const FluidSettings& fluid, double g) {
   const double p = fluid.density * g * std::max(0.0, head_m);
   return std::expm1(-std::log1p(fluid.gamma * p / fluid.bulk_modulus) / fluid.gamma);
@@ -97,10 +99,10 @@ class InflowBoundary {
   void seed() { apply(0.0, 0.0); }
 
   // After the step from t0 to t1: advances each lattice line by its recorded velocity, turns the particles
-  // that passed x_in into free water, removes free water upstream of x_in, and puts every buffer particle back
-  // on its slot. A slot of layer r holds water where the layer is wet: in the buffer where (r + 1/2) s lies
-  // below the recorded depth h; as it crosses, with the layer's wet fraction h / s - r error-diffused along the
-  // line, so the flux is integral of u(z) over the depth to within a particle per line.
+  // that passed x_in into free water, removes free water upstream of x_in, and puts every buffer particle
+  // back on its slot. A slot of layer r holds water where the layer is wet: in the buffer where (r + 1/2) s
+  // lies below the recorded depth h; as it crosses, with the layer's wet fraction h / s - r error-diffused
+  // along the line, so the flux is integral of u(z) over the depth to within a particle per line.
   Change apply(double t0, double t1) {
     const double dt = t1 - t0;
     Change out;
@@ -122,7 +124,7 @@ class InflowBoundary {
         phi_new[L] = phi_[L] + u_mid[r] * dt;
         u_new[L] = u_end[r];
         const long c_lo = col_floor(phi_[L]) + 1, c_hi = col_floor(phi_new[L]);  // crossing x_in this step
-        const long b_lo = c_hi + 1, b_hi = col_floor(phi_new[L] + lb_);         // the buffer after it
+        const long b_lo = c_hi + 1, b_hi = col_floor(phi_new[L] + lb_);          // the buffer after it
         first[L] = std::min(c_lo, b_lo);
         char* need = &need_[L * width_];
         for (long c = c_lo; c <= c_hi && c - first[L] < width_; ++c) {
@@ -151,7 +153,8 @@ class InflowBoundary {
         absorbed_ += mp_;
         continue;
       }
-      const long k = D == 3 ? std::clamp(std::lround(((*a_.x[1])[i] - f_.y_lo) / sy_ - 0.5), 0L, across_ - 1) : 0;
+      const long k =
+          D == 3 ? std::clamp(std::lround(((*a_.x[1])[i] - f_.y_lo) / sy_ - 0.5), 0L, across_ - 1) : 0;
       const long r = std::lround(((*a_.x[D - 1])[i] - floor_) / s_ - 0.5);
       const size_t L = k * layers_ + std::clamp(r, 0L, layers_ - 1);
       const long j = std::lround((x_in_ + phi_[L] - x) / s_ - 0.5) - first[L];
@@ -210,8 +213,9 @@ class InflowBoundary {
 
  private:
   // The velocity of each layer at (t, y): the recorded profile, shifted by the same amount in every layer so
-  // that its flux over the wet layers, sum of u_r s min(1, max(0, h / s - r)), is the recorded h u. The profile
-  // gives the shear (and the momentum over the quay); the depth and mean velocity give the mass, exactly.
+  // that its flux over the wet layers, sum of u_r s min(1, max(0, h / s - r)), is the recorded h u. The
+  // profile gives the shear (and the momentum over the quay); the depth and mean velocity give the mass,
+  // exactly.
   void profile(double t, double y, std::vector<double>& u) const {
     const InflowSample m = inflow_at(f_, t, y);
     double flux = 0;

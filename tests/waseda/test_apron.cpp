@@ -31,32 +31,41 @@ fs::path temp_dir(const std::string& name) {
 
 // (a) A box of water 0.2 m deep between x = 1 and 3 m: at rest between walls there, or moving at U = 0.5 m/s
 // with free ends. The section at x = 2 m must read the depth h and the velocity U: at rest for 0.45 s; moving
-// for 0.25 s, well before the rarefaction from the back end arrives (shallow-water theory: 1 m / (sqrt(g h) + U)
-// = 0.53 s; measured, the non-hydrostatic collapse of the ends thins the middle by 0.5 mm at 0.25 s and 4 mm
-// at 0.45 s, so the window stops well short of it). The first sample, before the velocity is set, is skipped. The section's weights sum exactly over a lattice, so the bound is one
-// particle's share of the depth, s^D / (dx bin), and the velocity that a depth error of that size carries in a
-// long wave, tol_h sqrt(g / h) (linear long-wave theory).
+// for 0.25 s, well before the rarefaction from the back end arrives (shallow-water theory: 1 m / (sqrt(g h) +
+// U) = 0.53 s; measured, the non-hydrostatic collapse of the ends thins the middle by 0.5 mm at 0.25 s and 4
+// mm at 0.45 s, so the window stops well short of it). The first sample, before the velocity is set, is
+// skipped. The section's weights sum exactly over a lattice, so the bound is one particle's share of the
+// depth, s^D / (dx bin), and the velocity that a depth error of that size carries in a long wave, tol_h
+// sqrt(g / h) (linear long-wave theory).
 TEST(Apron, SectionReadsDepthAndVelocityOfAUniformFlow) {
   const double h = 0.2;
   for (int dim : {2, 3})
     for (double U : {0.0, 0.5}) {
       std::string text;
-      const std::string ends2 = U == 0 ? R"(, {"name": "back", "type": "half_space", "point": [1, 0], "normal": [1, 0]},
-           {"name": "end", "type": "half_space", "point": [3, 0], "normal": [-1, 0]})" : "";
-      const std::string ends3 = U == 0 ? R"(, {"name": "back", "type": "half_space", "point": [1, 0, 0], "normal": [1, 0, 0]},
-           {"name": "end", "type": "half_space", "point": [3, 0, 0], "normal": [-1, 0, 0]})" : "";
+      const std::string ends2 =
+          U == 0 ? R"(, {"name": "back", "type": "half_space", "point": [1, 0], "normal": [1, 0]},
+           {"name": "end", "type": "half_space", "point": [3, 0], "normal": [-1, 0]})"
+                 : "";
+      const std::string ends3 =
+          U == 0 ? R"(, {"name": "back", "type": "half_space", "point": [1, 0, 0], "normal": [1, 0, 0]},
+           {"name": "end", "type": "half_space", "point": [3, 0, 0], "normal": [-1, 0, 0]})"
+                 : "";
       if (dim == 2)
-        text = R"({"name": "section", "dimension": 2, "domain": {"lo": [-0.12, -0.12], "hi": [4.12, 0.6], "walls": "slip"},
-          "boundaries": [{"name": "floor", "type": "half_space", "point": [0, 0], "normal": [0, 1], "condition": "slip"})" + ends2 + R"(],
+        text =
+            R"({"name": "section", "dimension": 2, "domain": {"lo": [-0.12, -0.12], "hi": [4.12, 0.6], "walls": "slip"},
+          "boundaries": [{"name": "floor", "type": "half_space", "point": [0, 0], "normal": [0, 1], "condition": "slip"})" +
+            ends2 + R"(],
           "water": [{"lo": [1, 0], "hi": [3, 0.2]}],
           "solver": {"dx": 0.02, "ppc": 4, "end_time": 0.45, "precision": "double"},
           "fluid": {"density": 998, "bulk_modulus": 2e6, "gamma": 7.125, "jbar_psi": 0.9},
           "instruments": {"sections": [{"name": "mid", "x_m": 2.0, "rate_hz": 100}]}})";
       else
-        text = R"({"name": "section", "dimension": 3, "domain": {"lo": [-0.12, -0.12, -0.12], "hi": [4.12, 0.52, 0.5], "walls": "slip"},
+        text =
+            R"({"name": "section", "dimension": 3, "domain": {"lo": [-0.12, -0.12, -0.12], "hi": [4.12, 0.52, 0.5], "walls": "slip"},
           "boundaries": [{"name": "floor", "type": "half_space", "point": [0, 0, 0], "normal": [0, 0, 1], "condition": "slip"},
                          {"name": "right", "type": "half_space", "point": [0, 0.08, 0], "normal": [0, 1, 0], "condition": "slip"},
-                         {"name": "left", "type": "half_space", "point": [0, 0.32, 0], "normal": [0, -1, 0], "condition": "slip"})" + ends3 + R"(],
+                         {"name": "left", "type": "half_space", "point": [0, 0.32, 0], "normal": [0, -1, 0], "condition": "slip"})" +
+            ends3 + R"(],
           "water": [{"lo": [1, 0.08, 0], "hi": [3, 0.32, 0.2]}],
           "solver": {"dx": 0.04, "ppc": 8, "end_time": 0.45, "precision": "double"},
           "fluid": {"density": 998, "bulk_modulus": 2e6, "gamma": 7.125, "jbar_psi": 0.9},
@@ -83,8 +92,10 @@ TEST(Apron, SectionReadsDepthAndVelocityOfAUniformFlow) {
           worst_h = std::max(worst_h, std::fabs(r.depth[i * r.bins() + j] - h));
           worst_u = std::max(worst_u, std::fabs(r.velocity[i * r.bins() + j] - U));
         }
-      std::printf("%dD, U = %.1f m/s: %zu samples; worst |depth - h| %.2e m (tol %.2e), |u - U| %.2e m/s (tol %.2e)\n",
-                  dim, U, wet, worst_h, tol_h, worst_u, tol_u);
+      std::printf(
+          "%dD, U = %.1f m/s: %zu samples; worst |depth - h| %.2e m (tol %.2e), |u - U| %.2e m/s (tol "
+          "%.2e)\n",
+          dim, U, wet, worst_h, tol_h, worst_u, tol_u);
       EXPECT_EQ(wet, samples * (dim == 3 ? 6 : 1));
       EXPECT_LT(worst_h, tol_h);
       EXPECT_LT(worst_u, tol_u);
@@ -130,7 +141,8 @@ std::string channel_scene(const std::string& record) {
   return R"({"name": "channel", "dimension": 2, "domain": {"lo": [0.2, -0.1], "hi": [4.0, 0.6], "walls": "slip"},
     "boundaries": [{"name": "floor", "type": "half_space", "point": [0, 0], "normal": [0, 1], "condition": "slip"}],
     "water": [{"lo": [0.5, 0], "hi": [3.9, 0.05]}],
-    "inflow": {"record": ")" + record + R"(", "section": "s", "x_m": 0.5},
+    "inflow": {"record": ")" +
+         record + R"(", "section": "s", "x_m": 0.5},
     "solver": {"dx": 0.02, "ppc": 4, "end_time": 1.5, "precision": "double"},
     "fluid": {"density": 998, "bulk_modulus": 2e6, "gamma": 7.125, "jbar_psi": 0.9}})";
 }
@@ -143,9 +155,9 @@ double mass_downstream(const Simulation& sim, double x_in, double particle_mass)
   return n * particle_mass;
 }
 
-// (b) The water that enters through the plane in 1.5 s is rho integral(h u) dt of the record. Bound: the slots
-// are error-diffused line by line (one particle, rho s^2, per lattice line, h_max / s + 1 lines), and each line
-// ends the run with a slot part-way across (another particle per line): 2 rho s (h_max + s).
+// (b) The water that enters through the plane in 1.5 s is rho integral(h u) dt of the record. Bound: the
+// slots are error-diffused line by line (one particle, rho s^2, per lattice line, h_max / s + 1 lines), and
+// each line ends the run with a slot part-way across (another particle per line): 2 rho s (h_max + s).
 TEST(Apron, InflowInjectsTheRecordedFlux) {
   const fs::path dir = temp_dir("mass");
   for (bool profile : {false, true}) {
@@ -158,8 +170,9 @@ TEST(Apron, InflowInjectsTheRecordedFlux) {
     ASSERT_EQ(test::run_until(*sim, 1.5), RunStatus::kOk) << sim->message();
     const double entered = mass_downstream(*sim, 0.5, mp) - m0, expected = kRho * q;
     const double tol = 2 * kRho * s * (h_max + s);
-    std::printf("profile %d: entered %.3f kg/m, recorded flux %.3f kg/m, difference %.3f (tol %.3f, %.1f%%)\n", profile,
-                entered, expected, entered - expected, tol, 100 * tol / expected);
+    std::printf(
+        "profile %d: entered %.3f kg/m, recorded flux %.3f kg/m, difference %.3f (tol %.3f, %.1f%%)\n",
+        profile, entered, expected, entered - expected, tol, 100 * tol / expected);
     EXPECT_NEAR(entered, expected, tol);
   }
   fs::remove_all(dir);
@@ -210,12 +223,13 @@ struct Series {
 };
 Series gauge(const fs::path& run, const std::string& name) {
   const std::string f = (run / "result.h5").string();
-  return {h5::read_vector(f, "/gauges/" + name + "/time"), h5::read_vector(f, "/gauges/" + name + "/elevation")};
+  return {h5::read_vector(f, "/gauges/" + name + "/time"),
+          h5::read_vector(f, "/gauges/" + name + "/elevation")};
 }
 
-// (c) The issue's check in 2D at dx = 0.04 m: waseda_2d for 5 s (the bore passes WG4 at 6.15 m by 3.4 s), then
-// waseda_apron_2d fed from its apron_inflow section. WG3 and WG4 of the two runs: RMS difference over the
-// record within 10% of the full run's peak (eta above still water, as the gauges report it).
+// (c) The issue's check in 2D at dx = 0.04 m: waseda_2d for 5 s (the bore passes WG4 at 6.15 m by 3.4 s),
+// then waseda_apron_2d fed from its apron_inflow section. WG3 and WG4 of the two runs: RMS difference over
+// the record within 10% of the full run's peak (eta above still water, as the gauges report it).
 TEST(Apron, Apron2dReproducesWg3AndWg4OfTheRunItWasFedFrom) {
   const fs::path dir = temp_dir("wg");
   const std::vector<Override> common = {{"solver.dx", "0.04"}, {"solver.end_time", "5"}};
@@ -224,7 +238,8 @@ TEST(Apron, Apron2dReproducesWg3AndWg4OfTheRunItWasFedFrom) {
   ASSERT_EQ(full.status, RunStatus::kOk) << full.message;
   std::vector<Override> sets = common;
   sets.push_back({"inflow.record", (dir / "full" / "result.h5").string()});
-  const RunOutcome apron = run_scene(load_scene(src + "waseda_apron_2d.json", sets), {}, (dir / "apron").string());
+  const RunOutcome apron =
+      run_scene(load_scene(src + "waseda_apron_2d.json", sets), {}, (dir / "apron").string());
   ASSERT_EQ(apron.status, RunStatus::kOk) << apron.message;
   for (const char* g : {"WG3", "WG4"}) {
     const Series a = gauge(dir / "full", g), b = gauge(dir / "apron", g);
@@ -237,16 +252,18 @@ TEST(Apron, Apron2dReproducesWg3AndWg4OfTheRunItWasFedFrom) {
       if (a.t[i] >= 2.0) sum2_late += d * d, ++late;
     }
     const double rms = std::sqrt(sum2 / a.t.size()), rms_late = std::sqrt(sum2_late / late);
-    std::printf("%s: peak %.4f m (apron %.4f m); RMS difference %.4f m = %.1f%% of the peak over 0-5 s, %.1f%% over "
-                "2-5 s\n",
-                g, peak, *std::max_element(b.v.begin(), b.v.end()), rms, 100 * rms / peak, 100 * rms_late / peak);
+    std::printf(
+        "%s: peak %.4f m (apron %.4f m); RMS difference %.4f m = %.1f%% of the peak over 0-5 s, %.1f%% over "
+        "2-5 s\n",
+        g, peak, *std::max_element(b.v.begin(), b.v.end()), rms, 100 * rms / peak, 100 * rms_late / peak);
     EXPECT_LE(rms, 0.10 * peak) << g;
   }
-  std::printf("cost: full %.2f s wall, %ld steps x %zu particles; apron %.2f s wall, %ld steps x %zu particles "
-              "(at the end); ratios %.2f (wall), %.2f (particle-steps)\n",
-              full.cost.wall_s, full.cost.steps, full.cost.particles, apron.cost.wall_s, apron.cost.steps,
-              apron.cost.particles, apron.cost.wall_s / full.cost.wall_s,
-              double(apron.cost.steps) * apron.cost.particles / (double(full.cost.steps) * full.cost.particles));
+  std::printf(
+      "cost: full %.2f s wall, %ld steps x %zu particles; apron %.2f s wall, %ld steps x %zu particles "
+      "(at the end); ratios %.2f (wall), %.2f (particle-steps)\n",
+      full.cost.wall_s, full.cost.steps, full.cost.particles, apron.cost.wall_s, apron.cost.steps,
+      apron.cost.particles, apron.cost.wall_s / full.cost.wall_s,
+      double(apron.cost.steps) * apron.cost.particles / (double(full.cost.steps) * full.cost.particles));
   fs::remove_all(dir);
 }
 
