@@ -20,6 +20,7 @@
 
 #include "common/errors.h"
 #include "solver/debris_coupling.h"
+#include "solver/inflow.h"
 #include "solver/instruments.h"
 #include "solver/mpm_kernels.h"
 #include "solver/simulation.h"
@@ -85,6 +86,12 @@ class MpmSolver final : public Simulation {
       debris_ = std::make_unique<DebrisCoupling>(scene_);
     }
     seed_particles();
+    if (scene.inflow.present) {  // the buffer of the inflow boundary (solver/inflow.h)
+      inflow_ = std::make_unique<InflowBoundary<D, T>>(scene_, spacing_, mp_, particle_arrays());
+      inflow_->seed();
+      n_ = x_[0].size();
+      mass_ = mp_ * n_;
+    }
     setup_boundaries();
     sort_particles();
     const Energy e = energy();
@@ -101,6 +108,7 @@ class MpmSolver final : public Simulation {
     double g = 0;
     for (int d = 0; d < D; ++d) g += scene.solver.gravity[d] * scene.solver.gravity[d];
     energy_slack_ = 0.01 * std::max({e.kinetic, mass_ * std::sqrt(g) * (zmax - zmin), 1e-12});
+    if (inflow_) energy_slack_ = std::max(energy_slack_, inflow_->energy_scale());
     instruments_.sample(*this, 0.0, 0.0, true);
   }
 
@@ -120,6 +128,7 @@ class MpmSolver final : public Simulation {
     time_ += dt;
     dt_ = dt;
     ++steps_;
+    if (inflow_ && status_ == RunStatus::kRunning) apply_inflow(time_ - dt, time_);
     if (status_ == RunStatus::kUnstable) {
       instruments_.sample(*this, time_, dt, true);
       return status_;
@@ -368,6 +377,7 @@ class MpmSolver final : public Simulation {
       for (int k = 0; k < D * D; ++k) permute(C_[k]);
       permute(e_);
       if (!held_.empty()) permute(held_);
+      if (!tag_.empty()) permute(tag_);
       std::vector<uint64_t> sorted(n_);
       for (size_t i = 0; i < n_; ++i) sorted[i] = key[order[i]];
       key.swap(sorted);
@@ -992,6 +1002,27 @@ class MpmSolver final : public Simulation {
     last_energy_ = {ke, pe, el, e_debris};
   }
 
+  ParticleArrays<D, T> particle_arrays() {
+    ParticleArrays<D, T> a;
+    for (int d = 0; d < D; ++d) {
+      a.x[d] = &x_[d];
+      a.v[d] = &v_[d];
+    }
+    for (int k = 0; k < D * D; ++k) a.C[k] = &C_[k];
+    a.e = &e_;
+    a.held = &held_;
+    a.tag = &tag_;
+    return a;
+  }
+  // The inflow moves, adds and removes particles after the step; the energy audit is told what it did.
+  void apply_inflow(double t0, double t1) {
+    const auto change = inflow_->apply(t0, t1);
+    energy0_ += change.energy;
+    n_ = x_[0].size();
+    mass_ = mp_ * n_;
+    needs_sort_ = needs_sort_ || change.structural;
+  }
+
   void fail(const std::string& what) {
     status_ = RunStatus::kUnstable;
     message_ = what;
@@ -1028,6 +1059,8 @@ class MpmSolver final : public Simulation {
   T domain_mu_ = 0;
   std::vector<double> load_impulse_;
   std::unique_ptr<DebrisCoupling> debris_;
+  std::unique_ptr<InflowBoundary<D, T>> inflow_;
+  std::vector<T> tag_;  // the inflow's buffer particles (1) and free water (0); empty without an inflow
   std::vector<std::vector<CouplingNode>> coupling_;  // per thread: the nodes found in boxes this step
   std::vector<double> push_out_;  // per particle block and box: impulse and moment of pushed-out particles
   // Nodes up to one cell outside a box are its moving-wall nodes: then a water particle touching the box puts

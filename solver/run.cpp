@@ -34,6 +34,29 @@ void write_record(h5::RunFile& file, const Scene& scene, const Record& record) {
     file.write_series("/loads/" + name, "time", ts.time);
     file.write_matrix("/loads/" + name, "force", ts.values, ts.components);
   }
+  // /sections/<name>: time (n), depth and velocity (n in 2D; n x bins in 3D, with the bin centres y).
+  for (const auto& [name, sr] : record.sections) {
+    const std::string g = "/sections/" + name;
+    file.write_series(g, "time", sr.time);
+    if (sr.y.empty()) {
+      file.write_series(g, "depth", sr.depth);
+      file.write_series(g, "velocity", sr.velocity);
+    } else {
+      file.write_series(g, "y", sr.y);
+      file.write_matrix(g, "depth", sr.depth, sr.bins());
+      file.write_matrix(g, "velocity", sr.velocity, sr.bins());
+    }
+    file.write_series(g, "z", sr.z);
+    file.write_matrix(g, "velocity_profile", sr.profile, sr.z.size());  // (time x bins) x layers
+    file.set_attribute(g, "x_m", sr.x_m);
+    file.set_attribute(g, "floor_m", sr.floor_m);
+    file.set_attribute(g, "bin_width_m", sr.bin_width_m);
+    file.set_attribute(g, "dimension", scene.dimension);
+    file.set_attribute(g, "units", "time s; y m (bin centres, bins bin_width_m wide); depth m (water volume per "
+                                   "unit area, mass / density); velocity m/s (depth-averaged streamwise, 0 where dry); "
+                                   "z m (layer centres, layers dx thick from floor_m); velocity_profile m/s "
+                                   "(time x bins rows, z columns; a layer without water holds the bin's velocity)");
+  }
   for (const auto& [name, v] : record.diagnostics) file.write_series("/diagnostics", name, v);
   file.set_attribute("/", "scene", scene.name);
   file.set_attribute("/", "scene_file", scene.file);

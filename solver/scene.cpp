@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "common/errors.h"
+#include "solver/inflow.h"
 
 namespace flume {
 namespace {
@@ -289,7 +290,17 @@ Basin read_basin(const json& root, const std::string& file, int dim) {
   b.choice<std::string>("walls", std::string("slip"), {{"sticky", "sticky"}, {"slip", "slip"}, {"separate", "separate"}});
   b.number("wall_friction", 0.0, 0.0, 10.0);
   b.choice<std::string>("instruments", std::string("waseda"), {{"waseda", "waseda"}, {"none", "none"}});
+  B.region = b.choice<std::string>("region", std::string("basin"), {{"basin", "basin"}, {"apron", "apron"}});
   b.finish();
+  if (B.region == "apron") {
+    // The apron alone (issue 3): the basin downstream of inflow.x_m, driven by the inflow's replay of a section
+    // record. Nothing upstream is modelled, so a reservoir has no meaning here.
+    if (!root.contains("inflow"))
+      b.fail("region", "apron needs an inflow section {\"record\": \"RUN/result.h5\", \"section\": \"apron_inflow\", "
+                       "\"x_m\": 4.35} to drive it");
+    if (root.contains("reservoir"))
+      throw InputError(file, "reservoir", "the apron region has no reservoir (the inflow drives it): remove this section");
+  }
 
   Reader r(root.contains("reservoir") ? root.at("reservoir") : empty, "reservoir", file);
   B.reservoir_length_m = r.number("length_m", 0.50, 0.0, B.quay_x_m, true, true);
@@ -357,6 +368,22 @@ void expand_basin(json& root, Basin& B, const std::string& file, int dim) {
   const double pad = 3 * dx;
   const double top = std::max(B.fill_level_m, B.apron_height_m + 0.3) + 0.1;
   const double L = B.length_m, Lr = B.reservoir_length_m, Lg = Lr + B.gate_thickness_m;
+  // The apron region starts at the inflow plane, with room upstream of it for the inflow's buffer.
+  const bool apron = B.region == "apron";
+  double x_in = 0, x_lo = -pad;
+  if (apron) {
+    json& in = root["inflow"];
+    if (!in.is_object()) throw InputError(file, "inflow", std::string("must be an object, got ") + type_name(in));
+    if (in.contains("x_m") && !in["x_m"].is_number()) throw InputError(file, "inflow.x_m", "must be a number");
+    if (in.contains("buffer_cells") && !in["buffer_cells"].is_number())
+      throw InputError(file, "inflow.buffer_cells", "must be a number");
+    x_in = in.value("x_m", 4.35);
+    if (!(x_in > 0 && x_in < B.quay_x_m))
+      throw InputError(file, "inflow.x_m", "must lie in (0, " + fmt(B.quay_x_m) + "), upstream of the quay, in an apron "
+                                           "region (got " + fmt(x_in) + ")");
+    x_lo = x_in - (in.value("buffer_cells", 3.0) + 3) * dx;
+    if (dim == 3 && !in.contains("y_m")) in["y_m"] = json::array({0.0, W});
+  }
 
   auto at = [&](double x, double y, double z) {
     return dim == 2 ? json::array({x, z}) : json::array({x, y, z});
@@ -369,9 +396,9 @@ void expand_basin(json& root, Basin& B, const std::string& file, int dim) {
     return json{{"name", name}, {"type", "half_space"}, {"point", point}, {"normal", normal},
                 {"condition", walls}, {"friction", wall_friction}};
   };
-  root["domain"] = {{"lo", at(-pad, -pad, -pad)}, {"hi", at(L + pad, W + pad, top + pad)}, {"walls", "slip"}};
+  root["domain"] = {{"lo", at(x_lo, -pad, -pad)}, {"hi", at(L + pad, W + pad, top + pad)}, {"walls", "slip"}};
   json bnd = json::array();
-  bnd.push_back(plane("back_wall", at(0, 0, 0), at(1, 0, 0)));
+  if (!apron) bnd.push_back(plane("back_wall", at(0, 0, 0), at(1, 0, 0)));
   bnd.push_back(plane("floor", at(0, 0, 0), at(0, 0, 1)));
   bnd.push_back(plane("end_wall", at(L, 0, 0), at(-1, 0, 0)));
   if (dim == 3) {
@@ -385,7 +412,7 @@ void expand_basin(json& root, Basin& B, const std::string& file, int dim) {
       bnd.push_back(plane("far_side_wall", at(0, W, 0), at(0, -1, 0)));
     }
   }
-  bnd.push_back(box("gate", Lr, Lg, -pad, W + pad, B.gate_height_m, top + 2 * pad));
+  if (!apron) bnd.push_back(box("gate", Lr, Lg, -pad, W + pad, B.gate_height_m, top + 2 * pad));
   bnd.push_back(box("quay", B.quay_x_m, L + 2 * pad, -pad, W + pad, -2 * pad, B.apron_height_m));
   // Obstacles: 0.10 m square columns, 5 across centred on the basin, rows 0.45 m apart.
   const int rows = B.obstacles_layout == "5x2" ? 2 : B.obstacles_layout == "5x1" ? 1 : 0;
@@ -416,9 +443,13 @@ void expand_basin(json& root, Basin& B, const std::string& file, int dim) {
   const double still = B.still_water_m;
   const double res_surface = B.forcing.model == ForcingModel::kNone ? B.fill_level_m : still;
   root["water"] = json::array();
-  root["water"].push_back({{"lo", at(0, 0, 0)}, {"hi", at(Lr, W, B.fill_level_m)}, {"surface", res_surface}});
-  root["water"].push_back({{"lo", at(Lr, 0, 0)}, {"hi", at(Lg, W, std::min(B.gate_height_m, still))}, {"surface", still}});
-  root["water"].push_back({{"lo", at(Lg, 0, 0)}, {"hi", at(B.quay_x_m, W, still)}, {"surface", still}});
+  if (apron) {  // still water from the inflow plane to the quay; the inflow brings the rest
+    root["water"].push_back({{"lo", at(x_in, 0, 0)}, {"hi", at(B.quay_x_m, W, still)}, {"surface", still}});
+  } else {
+    root["water"].push_back({{"lo", at(0, 0, 0)}, {"hi", at(Lr, W, B.fill_level_m)}, {"surface", res_surface}});
+    root["water"].push_back({{"lo", at(Lr, 0, 0)}, {"hi", at(Lg, W, std::min(B.gate_height_m, still))}, {"surface", still}});
+    root["water"].push_back({{"lo", at(Lg, 0, 0)}, {"hi", at(B.quay_x_m, W, still)}, {"surface", still}});
+  }
 
   // Instruments of the study's Table 1 in this frame: gauges report eta above still water.
   if (bs.value("instruments", std::string("waseda")) == "waseda") {
@@ -433,13 +464,19 @@ void expand_basin(json& root, Basin& B, const std::string& file, int dim) {
                                                                                 {"WG3", {4.69, wall_offset}},
                                                                                 {"WG4", {6.15, wall_offset}}}};
     for (const auto& [name, p] : wg)
-      gauges.push_back({{"name", name}, {"position", horizontal(p[0], p[1])}, {"rate_hz", 100}, {"datum_m", still}});
-    json probes = json::array({{{"name", "ADV"}, {"position", at(3.64, across(0.35), still - 0.10)}, {"rate_hz", 100}}});
-    for (const char* k : {"gauges", "probes", "loads"})
+      if (p[0] > x_in)  // the apron region keeps the instruments downstream of its inflow plane
+        gauges.push_back({{"name", name}, {"position", horizontal(p[0], p[1])}, {"rate_hz", 100}, {"datum_m", still}});
+    json probes = json::array();
+    if (!apron) probes.push_back({{"name", "ADV"}, {"position", at(3.64, across(0.35), still - 0.10)}, {"rate_hz", 100}});
+    // The section an apron run replays (issue 3): depth and velocity at x = 4.35 m, 0.10 m before the quay.
+    json sections = json::array();
+    if (!apron) sections.push_back({{"name", "apron_inflow"}, {"x_m", 4.35}, {"rate_hz", 200}});
+    for (const char* k : {"gauges", "probes", "loads", "sections"})
       if (!inst.contains(k)) inst[k] = json::array();
     for (auto& g : gauges) inst["gauges"].push_back(g);
     for (auto& p : probes) inst["probes"].push_back(p);
     for (auto& l : loads) inst["loads"].push_back(l);
+    for (auto& c : sections) inst["sections"].push_back(c);
   }
   root.erase("basin");
   root.erase("reservoir");
@@ -671,6 +708,15 @@ Scene parse(const json& root_json, const std::string& file) {
       r.finish();
       I.loads.push_back(l);
     }
+    for (auto& r : inst.array("sections")) {
+      Section c;
+      c.name = r.string("name", std::nullopt);
+      unique(r, c.name);
+      c.x_m = r.number("x_m", std::nullopt, sc.domain_lo[0] + 2 * sc.solver.dx, sc.domain_hi[0] - 2 * sc.solver.dx);
+      c.rate_hz = r.number("rate_hz", 200.0, 0.0, 1e6, true, false);
+      r.finish();
+      I.sections.push_back(c);
+    }
     I.diagnostics_rate_hz = inst.number("diagnostics_rate_hz", 100.0, 0.0, 1e7, true, false);
     I.snapshot_rate_hz = inst.number("snapshot_rate_hz", 0.0, 0.0, 1e4);
     inst.finish();
@@ -730,6 +776,27 @@ Scene parse(const json& root_json, const std::string& file) {
     }
     r.finish();
   }
+  if (root.has("inflow")) {
+    Reader r = root.object("inflow");
+    auto& F = sc.inflow;
+    F.present = true;
+    if (!r.has("record"))
+      r.fail("record", "is required: the result.h5 of a run with a section instrument at this plane (e.g. "
+                       "--set inflow.record=RUN/result.h5, a path relative to the working directory)");
+    F.record = r.string("record", std::nullopt);
+    F.section = r.string("section", std::string("apron_inflow"));
+    F.buffer_cells = r.number("buffer_cells", 3.0, 2.0, 10.0);
+    const double lo = sc.domain_lo[0] + (F.buffer_cells + 2) * sc.solver.dx;
+    F.x_m = r.number("x_m", 4.35, lo, sc.domain_hi[0] - 2 * sc.solver.dx);
+    if (dim == 3) {
+      if (!r.has("y_m")) r.fail("y_m", "is required in 3D: [lo, hi], the lateral extent of the water at the plane");
+      const Vec3d y = r.vec("y_m", 2);
+      if (!(y[1] > y[0])) r.fail("y_m", "must be [lo, hi] with hi > lo");
+      F.y_lo = y[0];
+      F.y_hi = y[1];
+    }
+    r.finish();
+  }
   root.finish();
   return sc;
 }
@@ -762,6 +829,7 @@ Scene parse_scene_text(const std::string& json_text, const std::string& file_lab
     DebrisSettings layout;
     expand_debris_layout(root, basin, layout, file_label, dim);
     Scene sc = parse(root, file_label);
+    if (sc.inflow.present) load_inflow_record(sc);
     sc.basin = basin;
     sc.debris.count = layout.count ? layout.count : static_cast<int>(sc.debris.bodies.size());
     sc.debris.layers = layout.layers;
@@ -770,6 +838,7 @@ Scene parse_scene_text(const std::string& json_text, const std::string& file_lab
     return sc;
   }
   Scene sc = parse(root, file_label);
+  if (sc.inflow.present) load_inflow_record(sc);
   sc.debris.count = static_cast<int>(sc.debris.bodies.size());
   return sc;
 }

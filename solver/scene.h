@@ -67,6 +67,13 @@ struct Probe {
   Vec3d position{};
   double rate_hz = 100;
 };
+// A vertical cross-section x = x_m (issue 3): at its rate, the water depth and the depth-averaged streamwise
+// velocity across it (one value in 2D; bins of width dx across y in 3D), the record an `inflow` replays.
+struct Section {
+  std::string name;
+  double x_m = 0;
+  double rate_hz = 200;
+};
 struct LoadCell {
   std::string name;
   std::string boundary;  // name of the boundary whose grid-node reaction is summed
@@ -77,6 +84,7 @@ struct Instruments {
   std::vector<Gauge> gauges;
   std::vector<Probe> probes;
   std::vector<LoadCell> loads;
+  std::vector<Section> sections;
   double diagnostics_rate_hz = 100;
   double snapshot_rate_hz = 0;  // 0: no particle snapshots
 };
@@ -96,6 +104,7 @@ struct ReservoirForcing {
 struct Basin {
   bool present = false;
   std::string span = "full";       // full | half | slice (2D)
+  std::string region = "basin";    // basin | apron (x >= inflow.x_m only, driven by the inflow)
   double length_m = 9.0, width_m = 4.0, still_water_m = 0.23, quay_x_m = 4.45, apron_height_m = 0.255;
   double slice_y_m = 2.0;          // the slice's position across (2D)
   double reservoir_length_m = 0.50, gate_thickness_m = 0.04, gate_height_m = 0.10, fill_level_m = 0.90;
@@ -130,6 +139,24 @@ struct DebrisSettings {
   std::vector<DebrisBody> bodies;
 };
 
+// Water entering through the vertical plane x = x_m (issue 3, `waseda_apron`): it replays the depth and
+// depth-averaged velocity that a section instrument of another run recorded there (solver/inflow.h). The
+// record is read and checked with the scene.
+struct InflowSettings {
+  bool present = false;
+  std::string record;          // a result.h5 holding /sections/<section>
+  std::string section;
+  double x_m = 4.35;
+  double buffer_cells = 3;     // the kinematic buffer upstream of the plane, in cells (the stencil's reach)
+  double y_lo = 0, y_hi = 0;   // 3D: the lateral extent of the water at the plane
+  // The record: time (nt), bin centres y (nb, 3D records; empty for 2D ones), depth and velocity (nt x nb).
+  int record_dimension = 2;
+  double record_bin_width_m = 0, record_floor_m = 0;
+  std::vector<double> time, y, depth, velocity;
+  std::vector<double> z, profile;  // velocity per layer (nt x nb x nz); empty: the depth average drives every row
+  size_t bins() const { return y.empty() ? 1 : y.size(); }
+};
+
 struct Scene {
   std::string file;  // where it was read from, for messages
   std::string name;
@@ -144,6 +171,7 @@ struct Scene {
   Instruments instruments;
   Basin basin;
   DebrisSettings debris;
+  InflowSettings inflow;
 };
 
 // A `--set path=value` override. The value is read as JSON where it parses as JSON, else as a string.

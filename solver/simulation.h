@@ -27,11 +27,24 @@ struct TimeSeries {
   double at(size_t i, int c = 0) const { return values[i * components + c]; }
 };
 
+// A section's record: per sample, per bin across y (one bin in 2D), the depth (water volume per unit area,
+// mass / density, m) and the mass-weighted mean streamwise velocity (m/s; 0 where dry).
+struct SectionSeries {
+  double x_m = 0, floor_m = 0, bin_width_m = 0;  // bin_width_m = 0 in 2D (per unit width)
+  std::vector<double> y;                          // bin centres (3D)
+  std::vector<double> time, depth, velocity;      // depth, velocity: time.size() x bins, row-major
+  // The vertical profile of the streamwise velocity: layers dx thick from the floor (centres z), per sample and
+  // bin (time.size() x bins x z.size()); a layer without water holds its bin's depth-averaged velocity.
+  std::vector<double> z, profile;
+  size_t bins() const { return y.empty() ? 1 : y.size(); }
+};
+
 // Everything the instruments recorded. Names are the instruments' names from the scene.
 struct Record {
   std::map<std::string, TimeSeries> gauges;  // water elevation above the gauge's datum (m)
   std::map<std::string, TimeSeries> probes;  // velocity (m/s), D components
   std::map<std::string, TimeSeries> loads;   // force of the water on a boundary (N; N/m in 2D), D components
+  std::map<std::string, SectionSeries> sections;
   std::map<std::string, std::vector<double>> diagnostics;  // time, mass, kinetic, potential, elastic, total, dt, max_speed, step
 };
 
