@@ -31,6 +31,9 @@ namespace fs = std::filesystem;
 using json = nlohmann::json;
 
 const std::string kWaseda = std::string(FLUME_SOURCE_DIR) + "/scenes/waseda/waseda_2d.json";
+// Debris need 3D: a dam-break bore hitting one container in a 0.3 m channel, at dx 0.03 (the box is 2 cells
+// high: coarse, which is what an extreme-value suite wants) and 1 s, by when the bore has struck it.
+const std::string kDebris = std::string(FLUME_SOURCE_DIR) + "/scenes/debris/bore_container.json";
 
 // The suite's base: dx = 0.05 m (the gate opening is 2 cells) and 1 s, in which the bore has passed the gate
 // and reached WG1; a case may shorten the time where its cost grows (the step scales with 1 / sound speed).
@@ -69,44 +72,44 @@ const std::vector<Case>& cases() {
       {"dx_0.25", kWaseda, {{"solver.dx", "0.25"}}, "the coarsest dx the scene allows (extent / 4)", false},
       {"dx_0.02", kWaseda, {{"solver.dx", "0.02"}, {"solver.end_time", "0.5"}}, "a fine dx", true},
       // Debris (issue 4): paths as the coupling will name them.
-      {"debris_friction_flume_0", kWaseda, {{"debris.friction.flume", "0"}}, "frictionless floor", false},
+      {"debris_friction_flume_0", kDebris, {{"solver.dx", "0.03"}, {"debris.friction.flume", "0"}}, "frictionless floor", false},
       {"debris_friction_flume_1",
-       kWaseda,
-       {{"debris.friction.flume", "1.0"}},
+       kDebris,
+       {{"solver.dx", "0.03"}, {"debris.friction.flume", "1.0"}},
        "friction 1 on the floor",
        false},
       {"debris_friction_debris_0",
-       kWaseda,
-       {{"debris.friction.debris", "0"}},
+       kDebris,
+       {{"solver.dx", "0.03"}, {"debris.friction.debris", "0"}},
        "frictionless debris contacts",
        false},
       {"debris_friction_debris_1",
-       kWaseda,
-       {{"debris.friction.debris", "1.0"}},
+       kDebris,
+       {{"solver.dx", "0.03"}, {"debris.friction.debris", "1.0"}},
        "friction 1 between debris",
        false},
       {"debris_restitution_flume_0",
-       kWaseda,
-       {{"debris.restitution.flume", "0"}},
+       kDebris,
+       {{"solver.dx", "0.03"}, {"debris.restitution.flume", "0"}},
        "plastic impact on walls",
        false},
       {"debris_restitution_flume_1",
-       kWaseda,
-       {{"debris.restitution.flume", "1"}},
+       kDebris,
+       {{"solver.dx", "0.03"}, {"debris.restitution.flume", "1"}},
        "elastic impact on walls",
        false},
       {"debris_restitution_debris_0",
-       kWaseda,
-       {{"debris.restitution.debris", "0"}},
+       kDebris,
+       {{"solver.dx", "0.03"}, {"debris.restitution.debris", "0"}},
        "plastic debris impacts",
        false},
       {"debris_restitution_debris_1",
-       kWaseda,
-       {{"debris.restitution.debris", "1"}},
+       kDebris,
+       {{"solver.dx", "0.03"}, {"debris.restitution.debris", "1"}},
        "elastic debris impacts",
        false},
-      {"debris_density_300", kWaseda, {{"debris.density", "300"}}, "light debris", false},
-      {"debris_density_990", kWaseda, {{"debris.density", "990"}}, "debris barely floating", false},
+      {"debris_density_300", kDebris, {{"solver.dx", "0.03"}, {"debris.density", "300"}}, "light debris", false},
+      {"debris_density_990", kDebris, {{"solver.dx", "0.03"}, {"debris.density", "990"}}, "debris barely floating", false},
   };
   return list;
 }
