@@ -812,7 +812,7 @@ class MpmSolver final : public Simulation {
     const T cscale = T(4) * inv_dx_ * inv_dx_;
     const T fill_rate = T(mpm::fill_rate(double(dt), c_, dx_));
     const long nblocks = static_cast<long>(pkeys_.size());
-    double vmax2 = 0, ke = 0, pe = 0, el = 0;
+    double vmax2 = 0, ke = 0, pe = 0, el = 0, fill_work = 0;
     long bad = std::numeric_limits<long>::max();
     int bad_kind = 0;
     bool resort = false;
@@ -823,7 +823,7 @@ class MpmSolver final : public Simulation {
     }
     const int nbodies = debris_ ? debris_->body_count() : 0;
     if (debris_) push_out_.assign(static_cast<size_t>(nblocks) * nbodies * 6, 0.0);
-#pragma omp parallel for schedule(dynamic, 4) reduction(max : vmax2) reduction(+ : ke, pe, el) reduction(|| : resort)
+#pragma omp parallel for schedule(dynamic, 4) reduction(max : vmax2) reduction(+ : ke, pe, el, fill_work) reduction(|| : resort)
     for (long p = 0; p < nblocks; ++p) {
       const bool near_debris = debris_ && block_near_debris(pkeys_[p], 2 * dx_);
       // Gather the grid velocities and J of the tile around this block.
@@ -918,7 +918,13 @@ class MpmSolver final : public Simulation {
         const bool have_grid = wsum > T(1e-3);
         const T e_grid = (have_grid ? Jg / wsum : T(0)) + mpm::hydrostatic_strain<D>(xp, strain_slope_);
         T e = mpm::jbar_update(e_[i], e_grid, mpm::volume_change<D>(Cn, dt), have_grid ? psi_ : T(0));
-        if (have_grid) e = mpm::fill_correction(e, Fg / wsum, fill_rate, fill_tolerance_);
+        if (have_grid) {
+          const T corrected = mpm::fill_correction(e, Fg / wsum, fill_rate, fill_tolerance_);
+          if (corrected != e)  // the constraint's work: supplied energy for the audit
+            fill_work += v0_ * (mpm::tait_energy_density(double(corrected), double(K_), double(gamma_)) -
+                                mpm::tait_energy_density(double(e), double(K_), double(gamma_)));
+          e = corrected;
+        }
         e_[i] = e;
         double v2 = 0, gx = 0;
         bool finite = std::isfinite(double(e)) && e > T(-1);
@@ -965,6 +971,9 @@ class MpmSolver final : public Simulation {
       }
     max_speed_ = std::sqrt(vmax2);
     needs_sort_ = resort;
+    // The volume constraint (mpm::fill_correction) does work on the water that the audit cannot otherwise see:
+    // it restores the elastic energy of water that crowded without compressing. Counted as supplied energy.
+    energy0_ += fill_work;
     const double t_new = time_ + double(dt);
     if (bad != std::numeric_limits<long>::max()) {
       double xp[D];

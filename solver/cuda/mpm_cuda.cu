@@ -114,6 +114,7 @@ struct View {
   T* v[D];
   T* C[D * D];
   T* e;
+  double* fill_work;  // per particle: the elastic energy the volume constraint added this step (J)
   const int32_t* pblk;  // index of the particle's (sorted) block in pkeys
   // blocks and grid
   const uint64_t* pkeys;
@@ -339,7 +340,15 @@ struct G2P {
     const bool have_grid = wsum > T(1e-3);
     const T e_grid = (have_grid ? Jg / wsum : T(0)) + mpm::hydrostatic_strain<D>(xp, s.strain_slope);
     T e = mpm::jbar_update(s.e[i], e_grid, mpm::volume_change<D>(Cn, dt), have_grid ? s.psi : T(0));
-    if (have_grid) e = mpm::fill_correction(e, Fg / wsum, fill_rate, s.fill_tol);
+    double work = 0;
+    if (have_grid) {
+      const T corrected = mpm::fill_correction(e, Fg / wsum, fill_rate, s.fill_tol);
+      if (corrected != e)
+        work = double(s.v0) * (mpm::tait_energy_density(double(corrected), double(s.K), double(s.gamma)) -
+                               mpm::tait_energy_density(double(e), double(s.K), double(s.gamma)));
+      e = corrected;
+    }
+    s.fill_work[i] = work;
     s.e[i] = e;
     for (int d = 0; d < D; ++d) {
       s.v[d][i] = vn[d];
@@ -353,6 +362,7 @@ struct G2P {
 // whether any particle drifted out of its sorted block.
 struct Audit {
   double vmax2 = 0, ke = 0, pe = 0, el = 0;
+  double fill_work = 0;  // energy the volume constraint added (MpmSolver::g2p)
   long long bad = -1;  // lowest index of a non-finite or escaped particle
   int bad_kind = 0;    // 1 non-finite, 2 left the domain
   int resort = 0;
@@ -364,6 +374,7 @@ struct AuditJoin {
     r.ke = a.ke + b.ke;
     r.pe = a.pe + b.pe;
     r.el = a.el + b.el;
+    r.fill_work = a.fill_work + b.fill_work;
     const bool take_a = a.bad >= 0 && (b.bad < 0 || a.bad < b.bad);
     r.bad = take_a ? a.bad : b.bad;
     r.bad_kind = take_a ? a.bad_kind : b.bad_kind;
@@ -377,6 +388,7 @@ struct AuditParticle {
   double lo_ok[D], hi_ok[D];
   FLUME_HD Audit operator()(size_t i) const {
     Audit r;
+    r.fill_work = s.fill_work[i];
     const T e = s.e[i];
     bool ok = is_finite(double(e)) && e > T(-1);
     bool inside = true;
@@ -662,6 +674,7 @@ class MpmCuda final : public Simulation {
     }
     for (int k = 0; k < D * D; ++k) C_[k].assign(n_, T(0));
     e_.assign(strain.begin(), strain.end());
+    fill_work_.assign(e_.size(), 0.0);
     mass_ = mp_ * n_;
     pblk_.resize(n_);
     keys_.resize(n_);
@@ -706,6 +719,7 @@ class MpmCuda final : public Simulation {
     }
     for (int k = 0; k < D * D; ++k) s.C[k] = raw(C_[k]);
     s.e = raw(e_);
+    s.fill_work = raw(fill_work_);
     s.pblk = raw(pblk_);
     s.pkeys = raw(pkeys_);
     s.p_nbr = raw(p_nbr_);
@@ -785,6 +799,7 @@ class MpmCuda final : public Simulation {
     const Audit a = reduce_audit();
     max_speed_ = std::sqrt(a.vmax2);
     needs_sort_ = a.resort != 0;
+    energy0_ += a.fill_work;  // the volume constraint's work is supplied energy (as in MpmSolver::g2p)
     const double t_new = time_ + double(dt);
     if (a.bad >= 0) {
       double xp[D];
@@ -857,6 +872,7 @@ class MpmCuda final : public Simulation {
   thr::device_vector<uint8_t> gwall_;
   thr::device_vector<Wall<D, T>> walls_;
   thr::device_vector<double> impulse_;
+  thr::device_vector<double> fill_work_;
   int n_walls_ = 0;
   int domain_bc_ = 2;
   T domain_mu_ = 0;
