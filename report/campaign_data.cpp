@@ -145,7 +145,7 @@ CampaignData load_campaign(const std::string& db_file, const std::string& campai
     if (in) {
       try {
         const json scene = json::parse(in);
-        for (const std::string path : {"obstacles.layout"}) {
+        for (const std::string path : {"obstacles.layout", "basin.width_m"}) {
           if (d.fixed.count(path)) continue;
           if (const json* v = find_path(scene, path))
             if (auto p = param_from_json(*v)) {

@@ -5,14 +5,14 @@
 
 namespace flume::report {
 
-std::vector<Rect> obstacle_layout(const std::string& layout) {
+std::vector<Rect> obstacle_layout(const std::string& layout, double y_mid) {
   int columns = 0, rows = 0;
   char tail = 0;
   if (std::sscanf(layout.c_str(), "%dx%d%c", &columns, &rows, &tail) != 2 || columns < 0 || rows < 0 ||
       columns > 50 || rows > 20)
     throw std::invalid_argument("obstacles.layout: expected CxR such as 0x0, 5x1 or 5x2 (got '" + layout +
                                 "')");
-  const double side = 0.10, pitch = 0.325, row_dx = 0.45, x_first = 5.11, y_mid = 2.0;
+  const double side = 0.10, pitch = 0.325, row_dx = 0.45, x_first = 5.11;
   std::vector<Rect> out;
   for (int r = 0; r < rows; ++r)
     for (int c = 0; c < columns; ++c) {
@@ -34,7 +34,10 @@ ApronGeometry apron_geometry(const CampaignData& data, const RunRow* row) {
     g.layout = row->params[j].text;
     g.layout_source = "parameter";
   }
-  g.obstacles = obstacle_layout(g.layout);
+  if (auto it = data.fixed.find("basin.width_m"); it != data.fixed.end() && !it->second.is_text &&
+                                                   it->second.number > 0)
+    g.y_hi_m = it->second.number;
+  g.obstacles = obstacle_layout(g.layout, 0.5 * (g.y_lo_m + g.y_hi_m));
   return g;
 }
 

@@ -24,12 +24,13 @@ struct ApronGeometry {
   std::vector<Rect> obstacles;
 };
 
-// The obstacle rectangles of a layout "CxR" (C columns across, R rows); throws std::invalid_argument for
-// another form.
-std::vector<Rect> obstacle_layout(const std::string& layout);
+// The obstacle rectangles of a layout "CxR" (C columns across, R rows), centred across at y_mid; throws
+// std::invalid_argument for another form.
+std::vector<Rect> obstacle_layout(const std::string& layout, double y_mid = 2.0);
 
 // Layout from a fixed value (overrides or scene) of `obstacles.layout`; when that path is a sampled
-// parameter, each run's own value (`row`); otherwise 0x0 with source "default".
+// parameter, each run's own value (`row`); otherwise 0x0 with source "default". The basin's width from a
+// fixed `basin.width_m` (a reduced strip such as scenes/waseda/waseda_strip.json), else 4 m.
 ApronGeometry apron_geometry(const CampaignData& data, const RunRow* row = nullptr);
 
 }  // namespace flume::report
