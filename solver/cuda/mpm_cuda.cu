@@ -343,9 +343,11 @@ struct G2P {
     double work = 0;
     if (have_grid) {
       const T corrected = mpm::fill_correction(e, Fg / wsum, fill_rate, s.fill_tol);
-      if (corrected != e)
+      if (corrected != e) {  // what the constraint supplies (what it removes is dissipation): MpmSolver::g2p
         work = double(s.v0) * (mpm::tait_energy_density(double(corrected), double(s.K), double(s.gamma)) -
                                mpm::tait_energy_density(double(e), double(s.K), double(s.gamma)));
+        work = work > 0.0 ? work : 0.0;
+      }
       e = corrected;
     }
     s.fill_work[i] = work;
