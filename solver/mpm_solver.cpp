@@ -18,6 +18,8 @@
 #include <numeric>
 #include <sstream>
 
+#include <Eigen/Core>
+
 #include "common/errors.h"
 #include "solver/debris_coupling.h"
 #include "solver/inflow.h"
@@ -62,6 +64,15 @@ class MpmSolver final : public Simulation {
   static constexpr int kTileNodes = mpm::Pow<D>::of(kTile);
   static constexpr int kNbr = mpm::Pow<D>::of(3);
   static constexpr int kChannels = D + 3;  // mass, momentum (D), mass-weighted strain J - 1, particle volume
+  // Tiles and the grid gather hold a node's channels side by side, padded to one SIMD vector (Eigen packet):
+  // a particle's contribution to a node is then one vector multiply-add, not kChannels scalar ones. G2P's
+  // tile holds per node the velocity, the free-node weight 1 (0 on a wall node) and the strain and fill times
+  // it, so one vector multiply-add per node gathers all of them.
+  static constexpr int kLanes = 8;
+  static_assert(kChannels <= kLanes && D + 3 <= kLanes, "channels must fit the lanes");
+  using Lane = Eigen::Array<T, kLanes, 1>;
+  using LaneMap = Eigen::Map<Lane>;
+  using ConstLaneMap = Eigen::Map<const Lane>;
 
  public:
   MpmSolver(const Scene& scene, const SimulationOptions& options)
@@ -457,7 +468,7 @@ class MpmSolver final : public Simulation {
     gfill_.resize(nodes);
     gwall_.resize(nodes);
     for (int d = 0; d < D; ++d) gv_[d].resize(nodes);
-    tiles_.resize(pkeys_.size() * kChannels * kTileNodes);
+    tiles_.resize(pkeys_.size() * kLanes * kTileNodes);
     needs_sort_ = false;
   }
 
@@ -515,6 +526,27 @@ class MpmSolver final : public Simulation {
     return count;
   }
 
+  // For each node of a particle block's tile: which of the 3^D neighbouring grid blocks holds it, and where.
+  struct TileNode {
+    int block, local;
+  };
+  static std::vector<TileNode> make_tile_map() {
+    std::vector<TileNode> map(kTileNodes);
+    for (int a = 0; a < kTileNodes; ++a) {
+      int o = 0, local = 0;
+      for (int d = D - 1, r = a, stride = 1, lstride = 1; d >= 0; --d, r /= kTile) {
+        const int ad = r % kTile;
+        const int bo = ad == 0 ? -1 : (ad <= kBlock ? 0 : 1);  // tile index 0 lies in the block below
+        o += (bo + 1) * stride;
+        local += (ad - 1 - kBlock * bo) * lstride;
+        stride *= 3;
+        lstride *= kBlock;
+      }
+      map[a] = {o, local};
+    }
+    return map;
+  }
+
   static int tile_index(const int* a) {
     int idx = 0;
     for (int d = 0; d < D; ++d) idx = idx * kTile + a[d];
@@ -522,7 +554,7 @@ class MpmSolver final : public Simulation {
   }
 
   // P2G: each particle block scatters mass, momentum (with the MLS-MPM stress term) and mass-weighted strain J - 1
-  // into its private tile.
+  // into its private tile, node-major with kLanes channels per node.
   void p2g(T dt) {
     const T dx = T(dx_);
     const T m = T(mp_);
@@ -531,8 +563,8 @@ class MpmSolver final : public Simulation {
     const long nblocks = static_cast<long>(pkeys_.size());
 #pragma omp parallel for schedule(dynamic, 4)
     for (long p = 0; p < nblocks; ++p) {
-      T* tile = &tiles_[static_cast<size_t>(p) * kChannels * kTileNodes];
-      std::fill(tile, tile + kChannels * kTileNodes, T(0));
+      T* tile = &tiles_[static_cast<size_t>(p) * kLanes * kTileNodes];
+      std::fill(tile, tile + kLanes * kTileNodes, T(0));
       int blk[D], origin[D];
       unpack_key<D>(pkeys_[p], blk);
       for (int d = 0; d < D; ++d) origin[d] = blk[d] * kBlock - 1;
@@ -550,53 +582,43 @@ class MpmSolver final : public Simulation {
         const T e = e_[i];
         mpm::fluid_stress<D>(e, Cp, K_, gamma_, mu_, sigma);
         for (int k = 0; k < D * D; ++k) A[k] = stress_scale * (T(1) + e) * sigma[k] + m * Cp[k];
-        // Momentum carried to node (rel + off): m v + A (off - f) dx, split into a constant and a linear part.
-        T mom0[D];
+        // What node (base + i) receives, before its weight: the channels at i = 0 plus i_b times slope[b].
+        // Momentum m v + A (x_node - x_p) = m v - A f dx + A i dx.
+        Lane at0 = Lane::Zero(), slope[D];
+        at0[0] = m;
         for (int a = 0; a < D; ++a) {
           T s = m * v_[a][i];
           for (int b = 0; b < D; ++b) s -= A[a * D + b] * f[b] * dx;
-          mom0[a] = s;
+          at0[1 + a] = s;
         }
         // The vacuum's hold: an upward force f(t) m |g| on the held water.
-        if (!held_.empty()) mom0[D - 1] += held_[i] * lift;
+        if (!held_.empty()) at0[D] += held_[i] * lift;
         T xp[D];
         for (int d = 0; d < D; ++d) xp[d] = x_[d][i];
-        const T mJ = m * (e - mpm::hydrostatic_strain<D>(xp, strain_slope_));
-        const T vol = T(v0_) * (T(1) + e);  // the particle's current volume, for the fill of its nodes
+        at0[1 + D] = m * (e - mpm::hydrostatic_strain<D>(xp, strain_slope_));
+        at0[2 + D] = T(v0_) * (T(1) + e);  // the particle's current volume, for the fill of its nodes
+        for (int b = 0; b < D; ++b) {
+          slope[b] = Lane::Zero();
+          for (int a = 0; a < D; ++a) slope[b][1 + a] = A[a * D + b] * dx;
+        }
         if constexpr (D == 2) {
-          for (int i0 = 0; i0 < 3; ++i0)
-            for (int i1 = 0; i1 < 3; ++i1) {
-              const T wt = w[0][i0] * w[1][i1];
-              const int node = (rel[0] + i0) * kTile + rel[1] + i1;
-              const T o0 = T(i0) * dx, o1 = T(i1) * dx;
-              tile[node] += wt * m;
-              tile[kTileNodes + node] += wt * (mom0[0] + A[0] * o0 + A[1] * o1);
-              tile[2 * kTileNodes + node] += wt * (mom0[1] + A[2] * o0 + A[3] * o1);
-              tile[3 * kTileNodes + node] += wt * mJ;
-              tile[4 * kTileNodes + node] += wt * vol;
-            }
+          for (int i0 = 0; i0 < 3; ++i0) {
+            const Lane r0 = at0 + T(i0) * slope[0];
+            const int row = (rel[0] + i0) * kTile + rel[1];
+            for (int i1 = 0; i1 < 3; ++i1)
+              LaneMap(tile + (row + i1) * kLanes) += (w[0][i0] * w[1][i1]) * (r0 + T(i1) * slope[1]);
+          }
         } else {
-          for (int i0 = 0; i0 < 3; ++i0)
+          for (int i0 = 0; i0 < 3; ++i0) {
+            const Lane r0 = at0 + T(i0) * slope[0];
             for (int i1 = 0; i1 < 3; ++i1) {
+              const Lane r1 = r0 + T(i1) * slope[1];
               const T w01 = w[0][i0] * w[1][i1];
-              const T o0 = T(i0) * dx, o1 = T(i1) * dx;
-              const T m0 = mom0[0] + A[0] * o0 + A[1] * o1;
-              const T m1 = mom0[1] + A[3] * o0 + A[4] * o1;
-              const T m2 = mom0[2] + A[6] * o0 + A[7] * o1;
               const int row = ((rel[0] + i0) * kTile + rel[1] + i1) * kTile + rel[2];
-#pragma omp simd
-              for (int i2 = 0; i2 < 3; ++i2) {
-                const T wt = w01 * w[2][i2];
-                const T o2 = T(i2) * dx;
-                const int node = row + i2;
-                tile[node] += wt * m;
-                tile[kTileNodes + node] += wt * (m0 + A[2] * o2);
-                tile[2 * kTileNodes + node] += wt * (m1 + A[5] * o2);
-                tile[3 * kTileNodes + node] += wt * (m2 + A[8] * o2);
-                tile[4 * kTileNodes + node] += wt * mJ;
-                tile[5 * kTileNodes + node] += wt * vol;
-              }
+              for (int i2 = 0; i2 < 3; ++i2)
+                LaneMap(tile + (row + i2) * kLanes) += (w01 * w[2][i2]) * (r1 + T(i2) * slope[2]);
             }
+          }
         }
       }
     }
@@ -616,29 +638,27 @@ class MpmSolver final : public Simulation {
       std::vector<CouplingNode>* my_coupling = debris_ ? &coupling_[omp_get_thread_num()] : nullptr;
 #pragma omp for schedule(dynamic, 8)
       for (long g = 0; g < ngb; ++g) {
-        T acc[kChannels][kNodes];
-        for (int c = 0; c < kChannels; ++c)
-          for (int k = 0; k < kNodes; ++k) acc[c][k] = T(0);
+        Lane acc[kNodes];
+        for (int k = 0; k < kNodes; ++k) acc[k] = Lane::Zero();
         for (int o = 0; o < kNbr; ++o) {
           const int32_t p = g_nbr_[g * kNbr + o];
           if (p < 0) continue;
           // Block offset of the particle block relative to this grid block, per axis.
           int off[D];
           for (int d = D - 1, r = o; d >= 0; --d, r /= 3) off[d] = -((r % 3) - 1);
-          // Local node range l and tile index a = l + 1 - 4*(-off) ... i.e. a = l + 1 + kBlock*off.
+          // Local node l of this block is tile node a = l + 1 + kBlock * off on each axis.
           int lo[D], hi[D];
           for (int d = 0; d < D; ++d) {
-            const int shift = 1 + kBlock * off[d];  // a = l + shift
+            const int shift = 1 + kBlock * off[d];
             lo[d] = std::max(0, -shift);
             hi[d] = std::min(kBlock, kTile - shift);
           }
-          const T* tile = &tiles_[static_cast<size_t>(p) * kChannels * kTileNodes];
+          const T* tile = &tiles_[static_cast<size_t>(p) * kLanes * kTileNodes];
           if constexpr (D == 2) {
             for (int l0 = lo[0]; l0 < hi[0]; ++l0)
               for (int l1 = lo[1]; l1 < hi[1]; ++l1) {
                 const int a = (l0 + 1 + kBlock * off[0]) * kTile + l1 + 1 + kBlock * off[1];
-                const int k = l0 * kBlock + l1;
-                for (int c = 0; c < kChannels; ++c) acc[c][k] += tile[c * kTileNodes + a];
+                acc[l0 * kBlock + l1] += ConstLaneMap(tile + a * kLanes);
               }
           } else {
             for (int l0 = lo[0]; l0 < hi[0]; ++l0)
@@ -646,8 +666,7 @@ class MpmSolver final : public Simulation {
                 for (int l2 = lo[2]; l2 < hi[2]; ++l2) {
                   const int a = ((l0 + 1 + kBlock * off[0]) * kTile + l1 + 1 + kBlock * off[1]) * kTile + l2 + 1 +
                                 kBlock * off[2];
-                  const int k = (l0 * kBlock + l1) * kBlock + l2;
-                  for (int c = 0; c < kChannels; ++c) acc[c][k] += tile[c * kTileNodes + a];
+                  acc[(l0 * kBlock + l1) * kBlock + l2] += ConstLaneMap(tile + a * kLanes);
                 }
           }
         }
@@ -671,7 +690,7 @@ class MpmSolver final : public Simulation {
           }
         }
         for (int k = 0; k < kNodes; ++k) {
-          const T m = acc[0][k];
+          const T m = acc[k][0];
           if (m <= T(0)) {
             gm_[base + k] = T(0);
             ge_[base + k] = T(0);
@@ -683,7 +702,7 @@ class MpmSolver final : public Simulation {
           T v[D];
           int node[D];
           for (int d = D - 1, r = k; d >= 0; --d, r /= kBlock) node[d] = blk[d] * kBlock + r % kBlock;
-          for (int d = 0; d < D; ++d) v[d] = acc[1 + d][k] / m + dt * gravity_[d];
+          for (int d = 0; d < D; ++d) v[d] = acc[k][1 + d] / m + dt * gravity_[d];
           uint8_t on_wall = 0;
           // Scene boundaries reaching this block.
           for (uint32_t q = g_bnd_start_[g]; q < g_bnd_start_[g + 1]; ++q) {
@@ -727,8 +746,8 @@ class MpmSolver final : public Simulation {
             }
           }
           gm_[base + k] = m;
-          ge_[base + k] = acc[1 + D][k] / m;
-          gfill_[base + k] = acc[2 + D][k] * inv_cell_volume;
+          ge_[base + k] = acc[k][1 + D] / m;
+          gfill_[base + k] = acc[k][2 + D] * inv_cell_volume;
           gwall_[base + k] = on_wall;
           for (int d = 0; d < D; ++d) gv_[d][base + k] = v[d];
         }
@@ -823,32 +842,25 @@ class MpmSolver final : public Simulation {
     }
     const int nbodies = debris_ ? debris_->body_count() : 0;
     if (debris_) push_out_.assign(static_cast<size_t>(nblocks) * nbodies * 6, 0.0);
+    static const std::vector<TileNode> tile_map = make_tile_map();
 #pragma omp parallel for schedule(dynamic, 4) reduction(max : vmax2) reduction(+ : ke, pe, el, fill_work) reduction(|| : resort)
     for (long p = 0; p < nblocks; ++p) {
       const bool near_debris = debris_ && block_near_debris(pkeys_[p], 2 * dx_);
-      // Gather the grid velocities and J of the tile around this block.
-      T tv[D][kTileNodes], tJ[kTileNodes], tF[kTileNodes];
-      uint8_t tW[kTileNodes];
+      // Gather the tile around this block: per node the velocity, then (free nodes only) strain, fill and weight.
+      alignas(64) T tg[kTileNodes * kLanes];
       int blk[D], origin[D];
       unpack_key<D>(pkeys_[p], blk);
       for (int d = 0; d < D; ++d) origin[d] = blk[d] * kBlock - 1;
       for (int a = 0; a < kTileNodes; ++a) {
-        int o = 0, local = 0;
-        for (int d = D - 1, r = a, stride = 1, lstride = 1; d >= 0; --d, r /= kTile) {
-          const int ad = r % kTile;
-          const int bo = ad == 0 ? -1 : (ad <= kBlock ? 0 : 1);  // tile index 0 lies in the block below
-          const int l = ad - 1 - kBlock * bo;
-          o += (bo + 1) * stride;
-          local += l * lstride;
-          stride *= 3;
-          lstride *= kBlock;
-        }
-        const int32_t g = p_nbr_[p * kNbr + o];
-        const size_t idx = static_cast<size_t>(g) * kNodes + local;
-        for (int d = 0; d < D; ++d) tv[d][a] = gv_[d][idx];
-        tJ[a] = ge_[idx];
-        tF[a] = gfill_[idx];
-        tW[a] = gwall_[idx];
+        const int32_t g = p_nbr_[p * kNbr + tile_map[a].block];
+        const size_t idx = static_cast<size_t>(g) * kNodes + tile_map[a].local;
+        T* t = tg + a * kLanes;
+        for (int d = 0; d < D; ++d) t[d] = gv_[d][idx];
+        const T free = gwall_[idx] ? T(0) : T(1);
+        t[D] = free * ge_[idx];
+        t[D + 1] = free * gfill_[idx];
+        t[D + 2] = free;
+        for (int c = D + 3; c < kLanes; ++c) t[c] = T(0);
       }
       for (uint32_t i = pstart_[p]; i < pstart_[p + 1]; ++i) {
         T w[D][3], f[D];
@@ -858,56 +870,45 @@ class MpmSolver final : public Simulation {
           rel[d] = mpm::stencil_base(xg, f[d]) - origin[d];
           mpm::bspline_weights(f[d], w[d]);
         }
-        T vn[D] = {}, Cn[D * D] = {}, Jg = 0, Fg = 0;
-        T wsum = 0;
+        // Separable sums over the stencil: S = sum w n, and M[b] = sum w i_b n (i_b the node's offset 0, 1, 2
+        // on axis b), n the node's lanes. Then v = S[0..D), the APIC matrix C_ab = sum w v_a (i_b - f_b) dx
+        // = (M[b][a] - f_b S[a]) dx, and the free-node sums of strain, fill and weight are S[D..D+3).
+        Lane S = Lane::Zero(), M[D];
+        for (int b = 0; b < D; ++b) M[b] = Lane::Zero();
         if constexpr (D == 2) {
-          for (int i0 = 0; i0 < 3; ++i0)
-            for (int i1 = 0; i1 < 3; ++i1) {
-              const T wt = w[0][i0] * w[1][i1];
-              const int a = (rel[0] + i0) * kTile + rel[1] + i1;
-              const T d0 = (T(i0) - f[0]) * dx, d1 = (T(i1) - f[1]) * dx;
-              const T u0 = wt * tv[0][a], u1 = wt * tv[1][a];
-              vn[0] += u0;
-              vn[1] += u1;
-              Cn[0] += u0 * d0;
-              Cn[1] += u0 * d1;
-              Cn[2] += u1 * d0;
-              Cn[3] += u1 * d1;
-              const T wj = tW[a] ? T(0) : wt;
-              Jg += wj * tJ[a];
-              Fg += wj * tF[a];
-              wsum += wj;
-            }
+          for (int i0 = 0; i0 < 3; ++i0) {
+            const T* n = tg + ((rel[0] + i0) * kTile + rel[1]) * kLanes;
+            const Lane n1 = ConstLaneMap(n + kLanes), n2 = ConstLaneMap(n + 2 * kLanes);
+            const Lane r = w[1][0] * ConstLaneMap(n) + w[1][1] * n1 + w[1][2] * n2;
+            const Lane r1 = w[1][1] * n1 + (T(2) * w[1][2]) * n2;
+            S += w[0][i0] * r;
+            M[0] += (T(i0) * w[0][i0]) * r;
+            M[1] += w[0][i0] * r1;
+          }
         } else {
-          for (int i0 = 0; i0 < 3; ++i0)
+          for (int i0 = 0; i0 < 3; ++i0) {
+            Lane S1 = Lane::Zero(), M1 = Lane::Zero(), M2 = Lane::Zero();
             for (int i1 = 0; i1 < 3; ++i1) {
-              const T w01 = w[0][i0] * w[1][i1];
-              const T d0 = (T(i0) - f[0]) * dx, d1 = (T(i1) - f[1]) * dx;
-              const int row = ((rel[0] + i0) * kTile + rel[1] + i1) * kTile + rel[2];
-              for (int i2 = 0; i2 < 3; ++i2) {
-                const T wt = w01 * w[2][i2];
-                const T d2 = (T(i2) - f[2]) * dx;
-                const int a = row + i2;
-                const T u0 = wt * tv[0][a], u1 = wt * tv[1][a], u2 = wt * tv[2][a];
-                vn[0] += u0;
-                vn[1] += u1;
-                vn[2] += u2;
-                Cn[0] += u0 * d0;
-                Cn[1] += u0 * d1;
-                Cn[2] += u0 * d2;
-                Cn[3] += u1 * d0;
-                Cn[4] += u1 * d1;
-                Cn[5] += u1 * d2;
-                Cn[6] += u2 * d0;
-                Cn[7] += u2 * d1;
-                Cn[8] += u2 * d2;
-                const T wj = tW[a] ? T(0) : wt;
-                Jg += wj * tJ[a];
-                Fg += wj * tF[a];
-                wsum += wj;
-              }
+              const T* n = tg + (((rel[0] + i0) * kTile + rel[1] + i1) * kTile + rel[2]) * kLanes;
+              const Lane n1 = ConstLaneMap(n + kLanes), n2 = ConstLaneMap(n + 2 * kLanes);
+              const Lane r = w[2][0] * ConstLaneMap(n) + w[2][1] * n1 + w[2][2] * n2;
+              const Lane r2 = w[2][1] * n1 + (T(2) * w[2][2]) * n2;
+              S1 += w[1][i1] * r;
+              M1 += (T(i1) * w[1][i1]) * r;
+              M2 += w[1][i1] * r2;
             }
+            S += w[0][i0] * S1;
+            M[0] += (T(i0) * w[0][i0]) * S1;
+            M[1] += w[0][i0] * M1;
+            M[2] += w[0][i0] * M2;
+          }
         }
+        T vn[D], Cn[D * D];
+        for (int a = 0; a < D; ++a) {
+          vn[a] = S[a];
+          for (int b = 0; b < D; ++b) Cn[a * D + b] = (M[b][a] - f[b] * S[a]) * dx;
+        }
+        const T Jg = S[D], Fg = S[D + 1], wsum = S[D + 2];
         for (int k = 0; k < D * D; ++k) Cn[k] *= cscale;
         T xp[D];
         for (int d = 0; d < D; ++d) xp[d] = x_[d][i];
