@@ -1,6 +1,7 @@
-// The trade-off study's own parts: error metrics on synthetic series with a known answer, the Pareto front,
-// spec validation (errors name the file and the field), the campaign `list` design it runs through, and one
-// small study end to end through `flume study tradeoff`, a variant scene file included.
+// The trade-off study's own parts: error metrics on synthetic series and run metrics with a known answer,
+// wildcards over metric names, the Pareto front, spec validation (errors name the file and the field), the
+// campaign `list` design it runs through, and one small study end to end through `flume study tradeoff`, a
+// variant scene file included.
 #include <gtest/gtest.h>
 #include <sqlite3.h>
 
@@ -87,6 +88,83 @@ TEST(Pareto, FrontIsTheNonDominatedSet) {
   EXPECT_EQ(front, (std::vector<bool>{true, true, false, true, false, false}));
   // Ties: two identical points do not dominate each other.
   EXPECT_EQ(pareto_front({1, 1}, {0.2, 0.2}), (std::vector<bool>{true, true}));
+}
+
+// Run metrics: |value - ref| / max(|ref|, scale), worked by hand.
+TEST(Compare, MetricRelativeDifferenceIsAgainstTheLargerOfReferenceAndScale) {
+  auto reading = [](double v) { return MetricReading{true, v}; };
+  // |0.72 - 0.8| / 0.8 = 0.1: the scale (0.015 m) is below |ref| and does not count.
+  MetricError e = compare_metric({"D1.longitudinal_max_m", 0.015}, reading(0.72), reading(0.8));
+  EXPECT_NEAR(e.diff, -0.08, 1e-15);
+  EXPECT_NEAR(e.rel, 0.1, 1e-15);
+  // A lateral displacement of 5 mm against a scale of 15 mm: 6 mm off is 0.4, not 1.2.
+  e = compare_metric({"D1.lateral_rest_m", 0.015}, reading(0.011), reading(0.005));
+  EXPECT_NEAR(e.diff, 0.006, 1e-15);
+  EXPECT_NEAR(e.rel, 0.4, 1e-14);
+  // A negative reference: its magnitude.
+  EXPECT_NEAR(compare_metric({"D1.spreading_rest_deg", 0}, reading(-4.0), reading(-5.0)).rel, 0.2, 1e-15);
+  // Reference 0 and no scale: no relative difference, and the reason in words.
+  e = compare_metric({"debris.mobilised_count", 0}, reading(1), reading(0));
+  EXPECT_TRUE(std::isnan(e.rel));
+  EXPECT_DOUBLE_EQ(e.diff, 1.0);
+  EXPECT_EQ(metric_problem(e), "reference 0, scale 0");
+  // Missing or not finite in the run, or in the reference.
+  EXPECT_EQ(metric_problem(compare_metric({"m", 0}, MetricReading{}, reading(1))), "missing");
+  EXPECT_EQ(metric_problem(compare_metric({"m", 0}, reading(NAN), reading(1))), "not finite");
+  EXPECT_EQ(metric_problem(compare_metric({"m", 0}, reading(1), MetricReading{})), "reference missing");
+  EXPECT_EQ(metric_problem(compare_metric({"m", 0}, reading(1), reading(INFINITY))), "reference not finite");
+  EXPECT_TRUE(std::isnan(compare_metric({"m", 0}, reading(INFINITY), reading(1)).diff));
+  EXPECT_EQ(metric_problem(compare_metric({"m", 0}, reading(2), reading(1))), "");
+}
+
+TEST(Compare, MeanMetricErrorLeavesOutWhatTheReferenceLacksAndRefusesARunThatLacksOne) {
+  auto reading = [](double v) { return MetricReading{true, v}; };
+  const MetricError a = compare_metric({"a", 0}, reading(1.1), reading(1.0));    // 0.1
+  const MetricError b = compare_metric({"b", 0.5}, reading(0.3), reading(0.1));  // 0.2 / 0.5 = 0.4
+  const MetricError no_ref = compare_metric({"c", 0}, reading(7), MetricReading{});
+  const MetricError zero_ref = compare_metric({"d", 0}, reading(7), reading(0));
+  EXPECT_NEAR(mean_metric_error({a, b}), 0.25, 1e-15);
+  // What the reference does not define is left out of every run's mean alike.
+  EXPECT_NEAR(mean_metric_error({a, no_ref, b, zero_ref}), 0.25, 1e-15);
+  // A run that lacks a metric the reference has is not ranked on fewer terms.
+  EXPECT_TRUE(std::isnan(mean_metric_error({a, compare_metric({"b", 0.5}, MetricReading{}, reading(0.1))})));
+  EXPECT_TRUE(std::isnan(mean_metric_error({a, compare_metric({"b", 0.5}, reading(NAN), reading(0.1))})));
+  EXPECT_TRUE(std::isnan(mean_metric_error({no_ref})));
+  EXPECT_TRUE(std::isnan(mean_metric_error({})));
+}
+
+TEST(Compare, WildcardsStayInsideOneComponentOfTheName) {
+  EXPECT_TRUE(wildcard_match("D*.rest_x_m", "D1.rest_x_m"));
+  EXPECT_TRUE(wildcard_match("D*.rest_x_m", "D12.rest_x_m"));
+  EXPECT_TRUE(wildcard_match("D*.rest_x_m", "D.rest_x_m"));
+  EXPECT_FALSE(wildcard_match("D*.rest_x_m", "D1.a.rest_x_m"));
+  EXPECT_FALSE(wildcard_match("D*.rest_x_m", "D1.rest_x_mm"));
+  EXPECT_FALSE(wildcard_match("D*.rest_x_m", "E1.rest_x_m"));
+  EXPECT_TRUE(wildcard_match("*.peak_force_n", "col3.peak_force_n"));
+  EXPECT_TRUE(wildcard_match("D1.*_deg", "D1.spreading_rest_deg"));
+  EXPECT_TRUE(wildcard_match("D*.*", "D2.dammed"));
+  EXPECT_FALSE(wildcard_match("D*", "D2.dammed"));
+  EXPECT_TRUE(wildcard_match("mass_kg", "mass_kg"));
+  EXPECT_FALSE(wildcard_match("mass_kg", "mass_kgs"));
+}
+
+TEST(Compare, PatternsExpandAgainstTheReferenceNames) {
+  const std::vector<std::string> ref = {"D1.lateral_rest_m", "D1.longitudinal_max_m", "D2.lateral_rest_m",
+                                        "D2.longitudinal_max_m", "debris.mobilised_count"};
+  std::vector<size_t> unmatched;
+  const auto out = expand_metric_patterns({{"D*.longitudinal_max_m", 0.01},
+                                           {"D*.lateral_rest_m", 0.02},
+                                           {"D2.longitudinal_max_m", 0.5},  // already given: first scale wins
+                                           {"D3.rest_x_m", 0},              // no `*`: kept, though absent
+                                           {"Q*.x", 0}},                    // matches nothing
+                                          ref, &unmatched);
+  std::vector<std::string> names;
+  std::vector<double> scales;
+  for (const auto& m : out) names.push_back(m.name), scales.push_back(m.scale);
+  EXPECT_EQ(names, (std::vector<std::string>{"D1.longitudinal_max_m", "D2.longitudinal_max_m",
+                                             "D1.lateral_rest_m", "D2.lateral_rest_m", "D3.rest_x_m"}));
+  EXPECT_EQ(scales, (std::vector<double>{0.01, 0.01, 0.02, 0.02, 0}));
+  EXPECT_EQ(unmatched, (std::vector<size_t>{4}));
 }
 
 const std::string kSrc = FLUME_SOURCE_DIR;
