@@ -1,6 +1,7 @@
 // `flume study tradeoff`: one scene over a list of fidelity settings (dx, ppc, precision, K, CFL, J-bar psi,
 // variant scene files), each run's cost and its error against a reference (the finest setting or a measured
-// record), the Pareto front of error against cost, as a table (markdown, CSV) and an SVG plot.
+// record) on gauges, load cells and run.json metrics (debris displacements, peak forces), the Pareto front of
+// each error against cost, as a table (markdown, CSV) and an SVG plot.
 //
 // The runs are a campaign with a `list` design (campaigns/spec.h) in the campaign store: the study is
 // resumable, a killed study loses no finished run, and `flume campaign status|export` and `flume report`
