@@ -66,6 +66,92 @@ GaugeError compare_gauge(const std::string& name, const Series& sim, const Serie
   return e;
 }
 
+namespace {
+// `*` takes none, one, ... characters of the name, never a '.'. Recursive: names and patterns are a few
+// dozen characters with one or two stars.
+bool match_from(const char* p, const char* n) {
+  if (*p == '\0') return *n == '\0';
+  if (*p == '*') {
+    for (const char* k = n;; ++k) {
+      if (match_from(p + 1, k)) return true;
+      if (*k == '\0' || *k == '.') return false;
+    }
+  }
+  return *p == *n && match_from(p + 1, n + 1);
+}
+}  // namespace
+
+bool wildcard_match(const std::string& pattern, const std::string& name) {
+  return match_from(pattern.c_str(), name.c_str());
+}
+
+std::vector<MetricOutput> expand_metric_patterns(const std::vector<MetricOutput>& patterns,
+                                                 const std::vector<std::string>& reference_names,
+                                                 std::vector<size_t>* unmatched) {
+  std::vector<MetricOutput> out;
+  auto add = [&](const std::string& name, double scale) {
+    for (const auto& m : out)
+      if (m.name == name) return;
+    out.push_back({name, scale});
+  };
+  for (size_t i = 0; i < patterns.size(); ++i) {
+    const MetricOutput& p = patterns[i];
+    if (p.name.find('*') == std::string::npos) {
+      add(p.name, p.scale);
+      continue;
+    }
+    bool matched = false;
+    for (const auto& n : reference_names)
+      if (wildcard_match(p.name, n)) {
+        add(n, p.scale);
+        matched = true;
+      }
+    if (!matched && unmatched) unmatched->push_back(i);
+  }
+  return out;
+}
+
+bool reference_defines(const MetricError& e) {
+  return std::isfinite(e.ref.value) && std::max(std::fabs(e.ref.value), e.scale) > 0;
+}
+
+MetricError compare_metric(const MetricOutput& metric, const MetricReading& value, const MetricReading& ref) {
+  MetricError e;
+  e.name = metric.name;
+  e.scale = metric.scale;
+  e.value = value;
+  e.ref = ref;
+  if (std::isfinite(value.value) && std::isfinite(ref.value)) {
+    e.diff = value.value - ref.value;
+    if (reference_defines(e)) e.rel = std::fabs(e.diff) / std::max(std::fabs(ref.value), metric.scale);
+  }
+  return e;
+}
+
+std::string reading_problem(const MetricReading& m) {
+  if (!m.present) return "missing";
+  return std::isfinite(m.value) ? "" : "not finite";
+}
+
+std::string metric_problem(const MetricError& e) {
+  const std::string ref = reading_problem(e.ref);
+  if (!ref.empty()) return "reference " + ref;
+  if (!reference_defines(e)) return "reference 0, scale 0";
+  return reading_problem(e.value);
+}
+
+double mean_metric_error(const std::vector<MetricError>& errors) {
+  double sum = 0;
+  size_t n = 0;
+  for (const auto& e : errors) {
+    if (!reference_defines(e)) continue;  // the same for every run: left out of every mean alike
+    if (!std::isfinite(e.rel)) return kNaN;
+    sum += e.rel;
+    ++n;
+  }
+  return n ? sum / double(n) : kNaN;
+}
+
 std::vector<bool> pareto_front(const std::vector<double>& cost, const std::vector<double>& error) {
   const size_t n = cost.size();
   std::vector<bool> front(n, false);

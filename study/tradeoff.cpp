@@ -48,6 +48,56 @@ InputError as_study_error(const InputError& e, const std::string& file) {
   return InputError(file, field, e.problem());
 }
 
+std::string joined(const std::vector<std::string>& v) {
+  std::string s;
+  for (const auto& x : v) s += (s.empty() ? "" : ", ") + x;
+  return s.empty() ? std::string("none") : s;
+}
+
+// `outputs.metrics`: each entry a name (or pattern) string or {"name", "scale"}.
+std::vector<MetricOutput> parse_metric_outputs(const nlohmann::json& a, const std::string& file) {
+  const std::string what =
+      "a run.json metric name (`*` matches any characters but '.') or "
+      "{\"name\": NAME, \"scale\": number >= 0}";
+  if (!a.is_array()) throw InputError(file, "outputs.metrics", "must be an array, each entry " + what);
+  std::vector<MetricOutput> metrics;
+  for (size_t i = 0; i < a.size(); ++i) {
+    const std::string at = "outputs.metrics." + std::to_string(i);
+    MetricOutput m;
+    std::string name_field = at;
+    if (a[i].is_string()) {
+      m.name = a[i].get<std::string>();
+    } else if (a[i].is_object()) {
+      for (auto it = a[i].begin(); it != a[i].end(); ++it)
+        if (it.key() != "name" && it.key() != "scale")
+          throw InputError(file, at + "." + it.key(), "unknown field (known: name, scale)");
+      name_field = at + ".name";
+      if (!a[i].contains("name") || !a[i]["name"].is_string())
+        throw InputError(file, name_field,
+                         "is required: a run.json metric name (`*` matches any characters but '.')");
+      m.name = a[i]["name"].get<std::string>();
+      if (a[i].contains("scale")) {
+        const json& v = a[i]["scale"];
+        if (!v.is_number() || !(v.get<double>() >= 0) || !std::isfinite(v.get<double>()))
+          throw InputError(file, at + ".scale",
+                           "must be a number >= 0 in the metric's unit (the relative difference's least "
+                           "denominator), got " +
+                               v.dump());
+        m.scale = v.get<double>();
+      }
+    } else {
+      throw InputError(file, at, "must be " + what);
+    }
+    if (m.name.empty()) throw InputError(file, name_field, "must not be empty");
+    for (size_t j = 0; j < metrics.size(); ++j)
+      if (metrics[j].name == m.name)
+        throw InputError(file, name_field,
+                         "'" + m.name + "' is already outputs.metrics." + std::to_string(j));
+    metrics.push_back(m);
+  }
+  return metrics;
+}
+
 }  // namespace
 
 TradeoffSpec parse_tradeoff_spec(const std::string& json_text, const std::string& file_label,
@@ -101,20 +151,14 @@ TradeoffSpec parse_tradeoff_spec(const std::string& json_text, const std::string
   std::vector<std::string> scene_gauges, scene_loads;
   for (const auto& g : scene.instruments.gauges) scene_gauges.push_back(g.name);
   for (const auto& l : scene.instruments.loads) scene_loads.push_back(l.name);
-  auto joined = [](const std::vector<std::string>& v) {
-    std::string s;
-    for (const auto& x : v) s += (s.empty() ? "" : ", ") + x;
-    return s.empty() ? std::string("none") : s;
-  };
 
   const json outputs = root.value("outputs", json::object());
-  if (!outputs.is_object())
-    throw fail("outputs", "must be an object {gauges, loads, window_s, arrival_threshold_m, front_s}");
+  const std::vector<std::string> output_fields = {"gauges",  "loads",  "window_s", "arrival_threshold_m",
+                                                  "front_s", "metrics"};
+  if (!outputs.is_object()) throw fail("outputs", "must be an object {" + joined(output_fields) + "}");
   for (auto it = outputs.begin(); it != outputs.end(); ++it)
-    if (it.key() != "gauges" && it.key() != "loads" && it.key() != "window_s" &&
-        it.key() != "arrival_threshold_m" && it.key() != "front_s")
-      throw fail("outputs." + it.key(),
-                 "unknown field (known: gauges, loads, window_s, arrival_threshold_m, front_s)");
+    if (std::find(output_fields.begin(), output_fields.end(), it.key()) == output_fields.end())
+      throw fail("outputs." + it.key(), "unknown field (known: " + joined(output_fields) + ")");
   auto names = [&](const char* key, const std::vector<std::string>& allowed, std::vector<std::string>& out,
                    bool all_by_default) {
     if (!outputs.contains(key)) {
@@ -136,9 +180,11 @@ TradeoffSpec parse_tradeoff_spec(const std::string& json_text, const std::string
   names("gauges", scene_gauges, spec.gauges, true);
   spec.scene_gauges = scene_gauges;
   names("loads", scene_loads, spec.loads, true);
-  if (spec.gauges.empty() && spec.loads.empty())
-    throw fail("outputs", "names no gauge and no load cell to compare (the scene has gauges: " +
-                              joined(scene_gauges) + "; loads: " + joined(scene_loads) + ")");
+  if (outputs.contains("metrics")) spec.metrics = parse_metric_outputs(outputs["metrics"], file_label);
+  if (spec.gauges.empty() && spec.loads.empty() && spec.metrics.empty())
+    throw fail("outputs", "names no gauge, no load cell and no metric to compare (the scene has gauges: " +
+                              joined(scene_gauges) + "; loads: " + joined(scene_loads) +
+                              "; metrics: any name of run.json's `metrics`)");
   spec.window_start_s = 0;
   spec.window_end_s = scene.solver.end_time;
   if (outputs.contains("window_s")) {
@@ -185,6 +231,9 @@ TradeoffSpec parse_tradeoff_spec(const std::string& json_text, const std::string
     if (!outputs.contains("loads")) spec.loads.clear();  // a gauge record: gauges only unless asked
     if (!spec.loads.empty())
       throw fail("outputs.loads", "a measured gauge record has no loads to compare: list gauges only");
+    if (!spec.metrics.empty())
+      throw fail("outputs.metrics",
+                 "a measured gauge record has no run metrics to compare: take a setting as the reference");
     // Checked now, so a study does not run for an hour before finding its record unreadable.
     std::set<std::string> have;
     for (const auto& rec :
@@ -251,6 +300,34 @@ std::string changes_of(const campaigns::CampaignSpec& c, size_t k) {
   return s.empty() ? "(scene as is)" : s;
 }
 
+// A run's run.json: its cost into `r`; returns its `metrics` object (empty where there is no run.json or it
+// is unreadable: a run killed while writing it, whose cost stays unknown).
+json read_run_json(const std::string& run_dir, SettingResult& r) {
+  std::ifstream in(fs::path(run_dir) / "run.json");
+  if (!in) return json::object();
+  try {
+    const json j = json::parse(in);
+    const json& cost = j.at("cost");
+    r.steps = cost.value("steps", -1LL);
+    r.particles = cost.value("particles", -1LL);
+    r.peak_rss_mb = cost.value("peak_rss_mb", NAN);
+    if (r.steps >= 0 && r.particles >= 0) r.particle_steps = double(r.steps) * double(r.particles);
+    const auto metrics = j.find("metrics");
+    return metrics != j.end() && metrics->is_object() ? *metrics : json::object();
+  } catch (const std::exception&) {
+    return json::object();
+  }
+}
+
+MetricReading metric_reading(const json& metrics, const std::string& name) {
+  MetricReading m;
+  const auto it = metrics.find(name);
+  if (it == metrics.end()) return m;
+  m.present = true;
+  if (it->is_number()) m.value = it->get<double>();  // null or a string: present, not finite
+  return m;
+}
+
 }  // namespace
 
 TradeoffResult evaluate_tradeoff(const TradeoffSpec& spec, const std::string& db_file) {
@@ -261,6 +338,11 @@ TradeoffResult evaluate_tradeoff(const TradeoffSpec& spec, const std::string& db
   const auto planned = campaigns::plan_runs(c);
   TradeoffResult result;
   std::vector<std::string> h5(planned.size());
+  std::vector<json> run_metrics(planned.size(), json::object());
+  // A run has a result once it ended ok, with its result file where gauges or load cells are compared (the
+  // metrics are in run.json).
+  const bool needs_h5 = !spec.gauges.empty() || !spec.loads.empty();
+  std::vector<bool> has_result(planned.size(), false);
   for (size_t k = 0; k < planned.size(); ++k) {
     SettingResult r;
     r.label = spec.labels[k];
@@ -274,19 +356,8 @@ TradeoffResult evaluate_tradeoff(const TradeoffSpec& spec, const std::string& db
       r.wall_s = stored->wall_s;
       if (r.status == store::RunStatus::kOk && !stored->h5_path.empty() && fs::exists(stored->h5_path))
         h5[k] = stored->h5_path;
-      std::ifstream in(fs::path(stored->run_dir) / "run.json");
-      if (in) {
-        try {
-          const json j = json::parse(in);
-          const json& cost = j.at("cost");
-          r.steps = cost.value("steps", -1LL);
-          r.particles = cost.value("particles", -1LL);
-          r.peak_rss_mb = cost.value("peak_rss_mb", NAN);
-          if (r.steps >= 0 && r.particles >= 0) r.particle_steps = double(r.steps) * double(r.particles);
-        } catch (const std::exception&) {
-          // a run killed while writing run.json: its cost stays unknown
-        }
-      }
+      has_result[k] = r.status == store::RunStatus::kOk && (!needs_h5 || !h5[k].empty());
+      run_metrics[k] = read_run_json(stored->run_dir, r);
     }
     result.rows.push_back(r);
   }
@@ -297,7 +368,7 @@ TradeoffResult evaluate_tradeoff(const TradeoffSpec& spec, const std::string& db
   if (spec.reference_setting) {
     const size_t k = *spec.reference_setting;
     const auto& r = result.rows[k];
-    if (h5[k].empty())
+    if (!has_result[k])
       throw InputError(spec.file, "reference.setting",
                        "the reference '" + r.label + "' has no result (status " + store::to_string(r.status) +
                            (r.message.empty() ? "" : ": " + r.message) + "); errors need it");
@@ -312,14 +383,35 @@ TradeoffResult evaluate_tradeoff(const TradeoffSpec& spec, const std::string& db
       ref_gauges[rec.gauge] = {rec.time, rec.elevation};
     result.reference = "measured record " + spec.reference_records;
   }
+  // The reference's metrics (parse_tradeoff_spec allows metrics with a reference setting only), which the
+  // patterns are expanded against.
+  const json no_metrics = json::object();
+  const json& ref_metrics = spec.reference_setting ? run_metrics[*spec.reference_setting] : no_metrics;
+  if (!spec.metrics.empty()) {
+    std::vector<std::string> ref_names;
+    for (auto it = ref_metrics.begin(); it != ref_metrics.end(); ++it) ref_names.push_back(it.key());
+    std::vector<size_t> unmatched;
+    result.metrics = expand_metric_patterns(spec.metrics, ref_names, &unmatched);
+    if (!unmatched.empty()) {
+      const size_t i = unmatched.front();
+      throw InputError(spec.file, "outputs.metrics." + std::to_string(i),
+                       "'" + spec.metrics[i].name +
+                           "' matches none of the reference run's metrics (it has: " + joined(ref_names) +
+                           ")");
+    }
+  }
+  result.measured[kRms] = result.measured[kArrival] = !spec.gauges.empty();
+  result.measured[kPeak] = !spec.gauges.empty() || !spec.loads.empty();
+  result.measured[kMetric] = !result.metrics.empty();
 
   std::vector<double> cost;
-  std::vector<double> errors[3];
+  std::vector<double> errors[kMeasureCount];
   for (size_t k = 0; k < result.rows.size(); ++k) {
     auto& r = result.rows[k];
-    if (!h5[k].empty()) {
-      double sum[3] = {0, 0, 0};
-      int n[3] = {0, 0, 0};
+    if (has_result[k]) {
+      // The gauge and load-cell aggregates: means over what is finite.
+      double sum[kMeasureCount] = {};
+      int n[kMeasureCount] = {};
       auto add = [&](int m, double v) {
         if (std::isfinite(v)) sum[m] += v, ++n[m];
       };
@@ -353,13 +445,17 @@ TradeoffResult evaluate_tradeoff(const TradeoffSpec& spec, const std::string& db
         r.loads.push_back(e);
         add(kPeak, std::fabs(e.peak_rel));
       }
-      for (int m = 0; m < 3; ++m) r.error[m] = n[m] ? sum[m] / n[m] : NAN;
+      for (int m : {kRms, kPeak, kArrival}) r.error[m] = n[m] ? sum[m] / n[m] : NAN;
+      for (const auto& m : result.metrics)
+        r.metrics.push_back(
+            compare_metric(m, metric_reading(run_metrics[k], m.name), metric_reading(ref_metrics, m.name)));
+      r.error[kMetric] = mean_metric_error(r.metrics);
     }
     // The reference setting is exact by definition: it is shown, not ranked.
     cost.push_back(r.reference ? NAN : r.wall_s);
-    for (int m = 0; m < 3; ++m) errors[m].push_back(r.reference ? NAN : r.error[m]);
+    for (int m = 0; m < kMeasureCount; ++m) errors[m].push_back(r.reference ? NAN : r.error[m]);
   }
-  for (int m = 0; m < 3; ++m) {
+  for (int m = 0; m < kMeasureCount; ++m) {
     const auto front = pareto_front(cost, errors[m]);
     for (size_t k = 0; k < front.size(); ++k) result.rows[k].pareto[m] = front[k];
   }
@@ -371,7 +467,8 @@ void store_errors(const TradeoffResult& result, const std::string& db_file) {
   for (const auto& r : result.rows) {
     if (r.run_id == 0 || r.status != store::RunStatus::kOk) continue;
     std::vector<std::pair<std::string, double>> m;
-    for (int k = 0; k < 3; ++k) {
+    for (int k = 0; k < kMeasureCount; ++k) {
+      if (!result.measured[k]) continue;
       const std::string name = std::string("error.") + kErrorNames[k] + (k == kArrival ? "_s" : "");
       m.emplace_back(name, r.reference ? 0.0 : r.error[k]);
       m.emplace_back(std::string("pareto.") + kErrorNames[k], r.pareto[k] ? 1.0 : 0.0);
@@ -382,7 +479,11 @@ void store_errors(const TradeoffResult& result, const std::string& db_file) {
       m.emplace_back("error." + g.name + ".arrival_diff_s", g.arrival_diff_s);
     }
     for (const auto& l : r.loads) m.emplace_back("error." + l.name + ".peak_rel", l.peak_rel);
-    db.record_metrics(r.run_id, m);
+    for (const auto& e : r.metrics) {
+      m.emplace_back("error." + e.name + ".diff", e.diff);
+      m.emplace_back("error." + e.name + ".rel", e.rel);
+    }
+    db.record_metrics(r.run_id, m);  // leaves out what is not finite (a missing metric's difference)
   }
 }
 
@@ -395,19 +496,21 @@ std::string tradeoff_markdown(const TradeoffSpec& spec, const TradeoffResult& re
                           : std::string())
      << ". `rms`: mean over gauges of RMS(difference) / reference peak; `peak`: mean of |peak error| / "
         "reference peak (gauges and load cells); `arrival`: mean |arrival difference| (s; where only one "
-        "arrived, the time from its arrival to the window's end). Pareto: the settings on the front of that "
-        "error against wall time.\n\n";
+        "arrived, the time from its arrival to the window's end); `metric`: mean over the run metrics of "
+        "|value - reference| / max(|reference|, scale). Pareto: the settings on the front of that error "
+        "against wall time.\n\n";
   md << "| setting | changes | status | wall s | particle-steps | peak RSS MB | rms | peak | arrival s | "
-        "Pareto |\n";
-  md << "|---|---|---|---|---|---|---|---|---|---|\n";
+        "metric | Pareto |\n";
+  md << "|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (const auto& r : result.rows) {
     std::string front;
-    for (int m = 0; m < 3; ++m)
+    for (int m = 0; m < kMeasureCount; ++m)
       if (r.pareto[m]) front += (front.empty() ? "" : ", ") + std::string(kErrorNames[m]);
     md << "| " << r.label << (r.reference ? " (reference)" : "") << " | " << r.changes << " | "
        << store::to_string(r.status) << " | " << fixed(r.wall_s, 1) << " | " << num(r.particle_steps) << " | "
        << fixed(r.peak_rss_mb, 0);
-    for (int m = 0; m < 3; ++m) md << " | " << (r.reference ? "0" : num(r.error[m], 2));
+    for (int m = 0; m < kMeasureCount; ++m)
+      md << " | " << (!result.measured[m] ? "-" : r.reference ? "0" : num(r.error[m], 2));
     md << " | " << front << " |\n";
   }
   if (!spec.gauges.empty()) {
@@ -442,6 +545,35 @@ std::string tradeoff_markdown(const TradeoffSpec& spec, const TradeoffResult& re
       md << "\n";
     }
   }
+  if (!result.metrics.empty()) {
+    md << "\nPer run metric: value / difference / relative difference (%), the relative difference being "
+          "|value - reference| / max(|reference|, scale); a metric the reference lacks (or has as 0 with "
+          "scale 0) is left out of `metric`, and a run that lacks one the reference has gets no `metric`\n\n"
+          "| setting |";
+    for (const auto& m : result.metrics) md << " " << m.name << " |";
+    md << "\n|---|";
+    for (size_t i = 0; i < result.metrics.size(); ++i) md << "---|";
+    md << "\n| scale |";
+    for (const auto& m : result.metrics) md << " " << num(m.scale) << " |";
+    md << "\n";
+    for (const auto& r : result.rows) {
+      if (r.metrics.empty()) continue;
+      md << "| " << r.label << (r.reference ? " (reference)" : "") << " |";
+      for (const auto& e : r.metrics) {
+        const std::string own = reading_problem(e.value);
+        md << " ";
+        if (!own.empty())
+          md << own;
+        else if (r.reference)
+          md << num(e.value.value, 4);
+        else
+          md << num(e.value.value, 4) << " / " << num(e.diff, 2) << " / "
+             << (std::isfinite(e.rel) ? fixed(100 * e.rel, 1) : metric_problem(e));
+        md << " |";
+      }
+      md << "\n";
+    }
+  }
   bool any_failed = false;
   for (const auto& r : result.rows)
     if (r.status != store::RunStatus::kOk) {
@@ -472,20 +604,21 @@ void write_tradeoff(const TradeoffSpec& spec, const TradeoffResult& result, cons
     };
     auto v = [](double x) { return std::isfinite(x) ? num(x, 10) : std::string(); };
     csv << "label,changes,status,reference,wall_s,steps,particles,particle_steps,peak_rss_mb,error_rms,error_"
-           "peak,"
-           "error_arrival_s,pareto_rms,pareto_peak,pareto_arrival";
+           "peak,error_arrival_s,error_metric,pareto_rms,pareto_peak,pareto_arrival,pareto_metric";
     for (const auto& g : spec.gauges)
       csv << "," << g << ".rms_m," << g << ".peak_m," << g << ".peak_rel," << g << ".arrival_s," << g
           << ".arrival_diff_s";
     for (const auto& l : spec.loads) csv << "," << l << ".peak_n," << l << ".peak_rel";
+    for (const auto& m : result.metrics)
+      csv << "," << m.name << ".value," << m.name << ".diff," << m.name << ".rel," << m.name << ".problem";
     csv << "\n";
     for (const auto& r : result.rows) {
       csv << q(r.label) << "," << q(r.changes) << "," << store::to_string(r.status) << "," << r.reference
           << "," << v(r.wall_s) << "," << (r.steps >= 0 ? std::to_string(r.steps) : "") << ","
           << (r.particles >= 0 ? std::to_string(r.particles) : "") << "," << v(r.particle_steps) << ","
           << v(r.peak_rss_mb) << "," << v(r.error[kRms]) << "," << v(r.error[kPeak]) << ","
-          << v(r.error[kArrival]) << "," << r.pareto[kRms] << "," << r.pareto[kPeak] << ","
-          << r.pareto[kArrival];
+          << v(r.error[kArrival]) << "," << v(r.error[kMetric]) << "," << r.pareto[kRms] << ","
+          << r.pareto[kPeak] << "," << r.pareto[kArrival] << "," << r.pareto[kMetric];
       for (size_t i = 0; i < spec.gauges.size(); ++i) {
         if (i < r.gauges.size()) {
           const auto& g = r.gauges[i];
@@ -501,17 +634,33 @@ void write_tradeoff(const TradeoffSpec& spec, const TradeoffResult& result, cons
         else
           csv << ",,";
       }
+      for (size_t i = 0; i < result.metrics.size(); ++i) {
+        if (i < r.metrics.size()) {
+          const auto& e = r.metrics[i];
+          csv << "," << v(e.value.value) << "," << v(e.diff) << "," << v(e.rel) << ","
+              << q(metric_problem(e));
+        } else {
+          csv << ",,,,";
+        }
+      }
       csv << "\n";
     }
     if (!csv) throw InputError(out_dir, "--out", "cannot write tradeoff.csv");
   }
-  // Each error against wall time, on log axes; the front joined and ringed.
-  plot::Figure fig(1, 3, 1500, 500);
+  // Each error against wall time, on log axes; the front joined and ringed. One panel per error the spec has
+  // outputs for (a study of debris metrics alone would otherwise show three empty panels).
+  std::vector<int> drawn;
+  for (int m = 0; m < kMeasureCount; ++m)
+    if (result.measured[m]) drawn.push_back(m);
+  const int panels = static_cast<int>(drawn.size());
+  plot::Figure fig(1, panels, 500 * panels, 500);
   fig.title("'" + spec.campaign.name + "': error against cost (vs " + result.reference + ")");
-  static const char* kYLabels[3] = {"RMS error / ref. peak", "|peak error| / ref. peak",
-                                    "|arrival error| [s]"};
-  for (int m = 0; m < 3; ++m) {
-    auto& ax = fig.axes(0, m);
+  static const char* kYLabels[kMeasureCount] = {"RMS error / ref. peak", "|peak error| / ref. peak",
+                                                "|arrival error| [s]",
+                                                "mean |metric diff.| / max(|ref.|, scale)"};
+  for (int panel = 0; panel < panels; ++panel) {
+    const int m = drawn[panel];
+    auto& ax = fig.axes(0, panel);
     ax.xlabel("wall time [s]")
         .ylabel(kYLabels[m])
         .xscale(plot::Scale::kLog)

@@ -16,10 +16,11 @@ namespace flume::test {
 
 // `evaluate(values, design_index)` gives each run's outcome (values in parameter order; a choice holds the
 // index of its value).
-inline campaigns::CampaignSpec make_campaign(
-    const std::string& db_file, const std::string& spec_json,
-    const std::function<store::RunOutcome(const std::vector<double>&, std::int64_t)>& evaluate) {
-  const campaigns::CampaignSpec spec = campaigns::parse_campaign_spec(spec_json, "spec.json", "");
+using Evaluate = std::function<store::RunOutcome(const std::vector<double>&, std::int64_t)>;
+
+// A spec already parsed (a study's campaign, say); returns the campaign's id.
+inline std::int64_t make_campaign(const std::string& db_file, const campaigns::CampaignSpec& spec,
+                                  const Evaluate& evaluate) {
   store::CampaignStore db(db_file);
   store::CampaignRecord rec;
   rec.name = spec.name;
@@ -36,6 +37,13 @@ inline campaigns::CampaignSpec make_campaign(
     store::RunOutcome out = evaluate(spec.points.values[t->design_index], t->design_index);
     db.record_outcome(t->run_id, out);
   }
+  return id;
+}
+
+inline campaigns::CampaignSpec make_campaign(const std::string& db_file, const std::string& spec_json,
+                                             const Evaluate& evaluate) {
+  const campaigns::CampaignSpec spec = campaigns::parse_campaign_spec(spec_json, "spec.json", "");
+  make_campaign(db_file, spec, evaluate);
   return spec;
 }
 
