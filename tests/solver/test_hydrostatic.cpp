@@ -18,7 +18,8 @@ constexpr double kRho = 1000, kG = 9.80665, kH = 0.2;
 // 20 cells per column height.
 double cell(int) { return 0.01; }
 
-std::string column_scene(int dim, const std::string& precision, const std::string& psi, bool preloaded) {
+std::string column_scene(int dim, const std::string& precision, const std::string& psi, bool preloaded,
+                         const std::string& side_condition) {
   const std::string lo = dim == 2 ? "[0.0, 0.0]" : "[0.0, 0.0, 0.0]";
   const std::string hi = dim == 2 ? "[0.1, 0.2]" : "[0.1, 0.1, 0.2]";
   const std::string dlo = dim == 2 ? "[-0.04, -0.04]" : "[-0.04, -0.04, -0.04]";
@@ -32,9 +33,9 @@ std::string column_scene(int dim, const std::string& precision, const std::strin
     };
     if (d < dim - 1) {  // side walls
       walls += R"({"type": "half_space", "point": )" + vec(0.0, d) + R"(, "normal": )" + vec(1.0, d) +
-               R"(, "condition": "slip"},)";
+               R"(, "condition": ")" + side_condition + R"("},)";
       walls += R"({"type": "half_space", "point": )" + vec(0.1, d) + R"(, "normal": )" + vec(-1.0, d) +
-               R"(, "condition": "slip"},)";
+               R"(, "condition": ")" + side_condition + R"("},)";
     }
   }
   walls += R"({"name": "floor", "type": "half_space", "point": )" + std::string(dim == 2 ? "[0.0, 0.0]" : "[0.0, 0.0, 0.0]") +
@@ -50,8 +51,10 @@ std::string column_scene(int dim, const std::string& precision, const std::strin
   })";
 }
 
-void check_column(int dim, const std::string& precision, const std::string& psi, bool preloaded = false) {
-  const Scene scene = parse_scene_text(column_scene(dim, precision, psi, preloaded), "hydrostatic.json");
+void check_column(int dim, const std::string& precision, const std::string& psi, bool preloaded = false,
+                  const std::string& side_condition = "slip") {
+  const Scene scene =
+      parse_scene_text(column_scene(dim, precision, psi, preloaded, side_condition), "hydrostatic.json");
   auto sim = make_simulation(scene, {});
   ASSERT_EQ(test::run_until(*sim, scene.solver.end_time), RunStatus::kOk) << sim->message();
 
@@ -100,8 +103,15 @@ void check_column(int dim, const std::string& precision, const std::string& psi,
 // still swings by 25% after 1.5 s. docs/validation.md has the numbers.)
 TEST(Hydrostatic, Column2DDoubleJbar) { check_column(2, "double", "0.9"); }
 TEST(Hydrostatic, Column2DFloatJbar) { check_column(2, "float", "0.9999"); }
-// Known failure, kept visible: in 3D at dx = H/20 the column has not settled after 1.5 s (spurious speed
-// 2.9e-2 m/s against the 1.4e-2 allowed; bottom pressure 2.0% low). Issue 2 stays open on it.
+// Known failure, kept visible: with slip side walls the 3D column does not settle. A convection cell forms
+// after about 1 s and persists: up within 1.5 cells of the side walls, down in the middle (mean vertical speed
+// +1.0e-2 and -1.2e-2 m/s at 2 s, max 2.8e-2 m/s at the vertical corners, against the 1.4e-2 allowed). The
+// pressure of the wall particles is 1.7% above that of the middle ones at the same height, and their vertical
+// gradient 1.3% steeper: a horizontal pressure difference a fluid at rest cannot hold. It does not come from
+// the J-bar mixing (the same at psi 0.9 and 0.9999), the volume constraint (the same without it) or the
+// initial load (the same preloaded). With sticky side walls the motion decays (max speed 1.1e-3 m/s at 1.5 s)
+// but the walls then carry 21% of the weight through the held near-wall water, which a fluid at rest cannot
+// either; check_column's side_condition argument reproduces both. Issue 2 stays open on it.
 TEST(Hydrostatic, DISABLED_Column3DFloatJbar) { check_column(3, "float", "0.9"); }
 
 }  // namespace
