@@ -968,7 +968,7 @@ class MpmSolver final : public Simulation {
         vmax2 = std::max(vmax2, v2);
         ke += 0.5 * mp_ * v2;
         pe -= mp_ * gx;
-        el += v0_ * mpm::tait_energy_density(double(e), double(K_), double(gamma_));
+        el += v0_ * double(mpm::tait_energy_density(e, K_, gamma_));  // in T: the audit needs no more
       }
     }
     if (debris_)  // the particles' lost momentum goes to the boxes, summed in block order (thread-independent)
