@@ -241,7 +241,7 @@ class InstrumentSet {
   // Depth and depth-averaged streamwise velocity across a section. Each particle counts with the quadratic
   // B-spline weight of its distance from the plane (in cells), as a grid node at x_m would weigh it: summed over
   // a regular lattice of any spacing dx/k these weights add up to exactly k, so water at rest reads its depth
-  // without the one-particle jumps of a +-dx/2 window (the gauges' artefact, docs/validation.md). Across y a
+  // without the one-particle jumps of a +-dx/2 window (gauge_elevation weighs the same way). Across y a
   // particle falls in one bin (bins partition the width, so the flux summed over bins is the total). Depth is
   // the water's volume per unit area at the reference density, mass / rho: the compression it leaves out is
   // rho g h / 2K (6e-4 at h = 0.23 m and K = 2e6 Pa). The velocity is also kept per layer dx thick: 0.1 m before
