@@ -19,7 +19,7 @@ constexpr double kRho = 1000, kG = 9.80665, kH = 0.2;
 double cell(int) { return 0.01; }
 
 std::string column_scene(int dim, const std::string& precision, const std::string& psi, bool preloaded,
-                         const std::string& side_condition) {
+                         const std::string& side_condition, double end_time) {
   const std::string lo = dim == 2 ? "[0.0, 0.0]" : "[0.0, 0.0, 0.0]";
   const std::string hi = dim == 2 ? "[0.1, 0.2]" : "[0.1, 0.1, 0.2]";
   const std::string dlo = dim == 2 ? "[-0.04, -0.04]" : "[-0.04, -0.04, -0.04]";
@@ -43,7 +43,7 @@ std::string column_scene(int dim, const std::string& precision, const std::strin
   return R"({"name": "hydrostatic", "dimension": )" + std::to_string(dim) + R"(,
     "domain": {"lo": )" + dlo + R"(, "hi": )" + dhi + R"(},
     "solver": {"dx": )" + std::to_string(cell(dim)) + R"(, "ppc": )" + (dim == 2 ? "4" : "8") + R"(, "cfl": 0.4, "precision": ")" + precision +
-         R"(", "end_time": 1.5},
+         R"(", "end_time": )" + std::to_string(end_time) + R"(},
     "fluid": {"bulk_modulus": 2.0e6, "gamma": 7.0, "viscosity": 1.0e-3, "jbar_psi": )" + psi + R"(},
     "water": [{"lo": )" + lo + R"(, "hi": )" + hi + R"(, "hydrostatic": )" + (preloaded ? "true" : "false") + R"(}],
     "boundaries": [)" + walls + R"(],
@@ -52,9 +52,9 @@ std::string column_scene(int dim, const std::string& precision, const std::strin
 }
 
 void check_column(int dim, const std::string& precision, const std::string& psi, bool preloaded = false,
-                  const std::string& side_condition = "slip") {
-  const Scene scene =
-      parse_scene_text(column_scene(dim, precision, psi, preloaded, side_condition), "hydrostatic.json");
+                  const std::string& side_condition = "slip", double end_time = 1.5) {
+  const Scene scene = parse_scene_text(column_scene(dim, precision, psi, preloaded, side_condition, end_time),
+                                       "hydrostatic.json");
   auto sim = make_simulation(scene, {});
   ASSERT_EQ(test::run_until(*sim, scene.solver.end_time), RunStatus::kOk) << sim->message();
 
@@ -103,6 +103,14 @@ void check_column(int dim, const std::string& precision, const std::string& psi,
 // still swings by 25% after 1.5 s. docs/validation.md has the numbers.)
 TEST(Hydrostatic, Column2DDoubleJbar) { check_column(2, "double", "0.9"); }
 TEST(Hydrostatic, Column2DFloatJbar) { check_column(2, "float", "0.9999"); }
+// Known failure, kept visible: the 2D column passes at 1.5 s, but it has not settled for good. From about 1 s
+// a pair of convection cells grows along the slip side walls (up within a cell of each wall, down in the
+// middle), as in 3D (below): at dx = 0.01 m, K = 2e6 Pa the kinetic energy goes 7.9e-5 J/m at 1 s, 3.0e-4 at
+// 2 s, 4.4e-4 at 2.5 s, max speed 1.8e-2 m/s at 2.5 s against the 1.4e-2 allowed. It scales with the
+// compressibility (K = 2e7 Pa: 1.7e-5 J/m at 2.5 s, no growth), does not depend on the J-bar psi (0, 0.9,
+// 0.9999), the volume constraint, the precision, ppc (4 or 9) or a ten times larger viscosity, and vanishes
+// with sticky side walls (1.6e-7 J/m at 2.5 s), which carry part of the weight instead. Issue 2 stays open on it.
+TEST(Hydrostatic, DISABLED_Column2DDoubleJbarStaysSettledTo3s) { check_column(2, "double", "0.9", false, "slip", 3.0); }
 // Known failure, kept visible: with slip side walls the 3D column does not settle. A convection cell forms
 // after about 1 s and persists: up within 1.5 cells of the side walls, down in the middle (mean vertical speed
 // +1.0e-2 and -1.2e-2 m/s at 2 s, max 2.8e-2 m/s at the vertical corners, against the 1.4e-2 allowed). The
