@@ -223,6 +223,76 @@ FLUME_HD void project_velocity(T* v, const T* n, const T* vb, Bc bc, T mu) {
   for (int a = 0; a < D; ++a) v[a] = vb[a] + scale * vt[a];
 }
 
+// Free slip by reflection. A grid node half a cell or more inside a solid (a ghost node) gets its mass from the
+// few particles within reach of it, and with a slip wall its tangential velocity was free: computed from that
+// thin, one-sided stencil it drifted, and a column of water at rest grew a convection along its side walls
+// (up at the walls, down in the middle; docs/validation.md, section 1). A free-slip wall is a mirror: the
+// ghost node at depth k dx takes the tangential velocity of the fluid node at distance k dx on the other side
+// (its reflection, node + 2 k n), and keeps the normal velocity the wall condition gave it. Sticky walls keep
+// their own rule. These functions add, per solid holding the node, the reflection's offset in nodes along
+// the solid's (axis-aligned) normal, and the axis to `axes`; `ambiguous` is set where the reflection is not
+// defined (a normal off the grid axes, two solids along one axis as inside a thin panel), and the node then
+// keeps its velocity.
+constexpr double kGhostDepth = 0.5;  // in cells: a node at least this far inside is a ghost node
+
+FLUME_HD void ghost_axis_step(int axis, double depth_cells, int sign, int* offset, unsigned& axes,
+                                     bool& ambiguous) {
+  if (depth_cells < kGhostDepth) return;
+  if (axes & (1u << axis)) {
+    ambiguous = true;
+    return;
+  }
+  axes |= 1u << axis;
+  offset[axis] += 2 * sign * static_cast<int>(depth_cells + 0.5);
+}
+
+template <int D>
+FLUME_HD void ghost_half_space(const double* x, const double* point, const double* n, double dx, int* offset,
+                               unsigned& axes, bool& ambiguous) {
+  double dist = 0;
+  int axis = -1;
+  for (int a = 0; a < D; ++a) {
+    dist += (x[a] - point[a]) * n[a];
+    if (n[a] > 0.999 || n[a] < -0.999) axis = a;
+  }
+  if (-dist < kGhostDepth * dx) return;
+  if (axis < 0) {
+    ambiguous = true;
+    return;
+  }
+  ghost_axis_step(axis, -dist / dx, n[axis] > 0 ? 1 : -1, offset, axes, ambiguous);
+}
+
+// A node inside a box [lo, hi]: each face it lies 0.5 to 2 cells inside of (as MpmSolver::node_in_wall holds it).
+template <int D>
+FLUME_HD void ghost_box(const double* x, const double* lo, const double* hi, double dx, int* offset, unsigned& axes,
+                        bool& ambiguous) {
+  for (int a = 0; a < D; ++a)
+    if (!(x[a] > lo[a] && x[a] < hi[a])) return;  // not strictly inside
+  for (int a = 0; a < D; ++a) {
+    const double below = (x[a] - lo[a]) / dx, above = (hi[a] - x[a]) / dx;
+    if (below <= 2) ghost_axis_step(a, below, -1, offset, axes, ambiguous);
+    if (above <= 2) ghost_axis_step(a, above, 1, offset, axes, ambiguous);
+  }
+}
+
+// Nodes beyond the domain box's faces (the container).
+template <int D>
+FLUME_HD void ghost_domain(const double* x, const double* lo, const double* hi, double dx, int* offset,
+                           unsigned& axes, bool& ambiguous) {
+  for (int a = 0; a < D; ++a) {
+    if (x[a] < lo[a]) ghost_axis_step(a, (lo[a] - x[a]) / dx, 1, offset, axes, ambiguous);
+    if (x[a] > hi[a]) ghost_axis_step(a, (x[a] - hi[a]) / dx, -1, offset, axes, ambiguous);
+  }
+}
+
+// The reflected velocity: the tangential components (axes not in `axes`) from the mirror node.
+template <int D, typename T>
+FLUME_HD void ghost_velocity(T* v, const T* mirror_v, unsigned axes) {
+  for (int a = 0; a < D; ++a)
+    if (!(axes & (1u << a))) v[a] = mirror_v[a];
+}
+
 // Signed distance and outward normal of an axis-aligned solid box [lo, hi] (negative inside).
 template <int D, typename T>
 FLUME_HD T box_distance(const T* x, const T* lo, const T* hi, T* normal) {
