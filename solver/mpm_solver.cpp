@@ -486,12 +486,6 @@ class MpmSolver final : public Simulation {
     }
   }
 
-  struct Ghost {
-    size_t idx = 0;       // the ghost node
-    int offset[D] = {};   // the reflection's offset in nodes, then (after the walls) the mirror node
-    unsigned axes = 0;    // the normal axes: kept; the others come from the mirror
-    int32_t wall = -1;    // the wall whose load the reflection's impulse counts on
-  };
   struct Wall {
     bool box = true;
     T a[D], b[D];  // box: lo, hi; half-space: point, normal
@@ -649,13 +643,10 @@ class MpmSolver final : public Simulation {
     const int nthreads = omp_get_max_threads();
     std::vector<double> impulse(static_cast<size_t>(nthreads) * walls_.size() * D, 0.0);
     if (debris_) coupling_.assign(nthreads, {});
-    ghosts_.resize(nthreads);
 #pragma omp parallel
     {
       double* my_impulse = impulse.data() + static_cast<size_t>(omp_get_thread_num()) * walls_.size() * D;
       std::vector<CouplingNode>* my_coupling = debris_ ? &coupling_[omp_get_thread_num()] : nullptr;
-      std::vector<Ghost>* my_ghosts = &ghosts_[omp_get_thread_num()];
-      my_ghosts->clear();
 #pragma omp for schedule(dynamic, 8)
       for (long g = 0; g < ngb; ++g) {
         Lane acc[kNodes];
@@ -724,11 +715,6 @@ class MpmSolver final : public Simulation {
           for (int d = D - 1, r = k; d >= 0; --d, r /= kBlock) node[d] = blk[d] * kBlock + r % kBlock;
           for (int d = 0; d < D; ++d) v[d] = acc[k][1 + d] / m + dt * gravity_[d];
           uint8_t on_wall = 0;
-          // Ghost nodes (mpm::ghost_half_space): the reflection's offset, and the wall whose load it counts on.
-          double xd[D];
-          for (int d = 0; d < D; ++d) xd[d] = grid_lo_[d] + node[d] * dx_;
-          Ghost ghost;
-          bool ambiguous = false;
           // Scene boundaries reaching this block.
           for (uint32_t q = g_bnd_start_[g]; q < g_bnd_start_[g + 1]; ++q) {
             const Wall& w = walls_[g_bnd_[q]];
@@ -740,29 +726,6 @@ class MpmSolver final : public Simulation {
             for (int d = 0; d < D; ++d) before[d] = v[d];
             for (int f = 0; f < faces; ++f) mpm::project_velocity<D>(v, n[f], w.vb, w.bc, w.mu);
             for (int d = 0; d < D; ++d) my_impulse[g_bnd_[q] * D + d] += double(m) * (before[d] - v[d]);
-            if (w.bc == mpm::Bc::kSticky) {
-              ambiguous = true;
-            } else {
-              const unsigned had = ghost.axes;
-              if (w.box)
-                mpm::ghost_box<D>(xd, w.ad, w.bd, dx_, ghost.offset, ghost.axes, ambiguous);
-              else
-                mpm::ghost_half_space<D>(xd, w.ad, w.bd, dx_, ghost.offset, ghost.axes, ambiguous);
-              if (ghost.axes != had && ghost.wall < 0) ghost.wall = g_bnd_[q];
-            }
-          }
-          if (domain_bc_ == mpm::Bc::kSticky) {
-            for (int d = 0; d < D; ++d)
-              ambiguous |= xd[d] < scene_.domain_lo[d] - mpm::kGhostDepth * dx_ ||
-                           xd[d] > scene_.domain_hi[d] + mpm::kGhostDepth * dx_;
-          } else {
-            mpm::ghost_domain<D>(xd, scene_.domain_lo.data(), scene_.domain_hi.data(), dx_, ghost.offset, ghost.axes,
-                                 ambiguous);
-          }
-          if (ghost.axes && !ambiguous) {
-            ghost.idx = base + k;
-            for (int d = 0; d < D; ++d) ghost.offset[d] += node[d];  // now the mirror node itself
-            my_ghosts->push_back(ghost);
           }
           // The domain box is a container: nodes on or beyond its faces are walls.
           for (int d = 0; d < D; ++d) {
@@ -801,45 +764,10 @@ class MpmSolver final : public Simulation {
         }
       }
     }
+    if (debris_) couple_debris(double(dt));
     std::fill(load_impulse_.begin(), load_impulse_.end(), 0.0);
     for (int t = 0; t < nthreads; ++t)
       for (size_t k = 0; k < load_impulse_.size(); ++k) load_impulse_[k] += impulse[t * load_impulse_.size() + k];
-    reflect_ghosts();
-    if (debris_) couple_debris(double(dt));
-  }
-
-  // Ghost nodes take the tangential velocity of their reflection (mpm::ghost_velocity), a free node with water;
-  // the change is impulse the wall gave the water, counted on its load. Ghosts only read free nodes, so the
-  // order does not matter; serial over the threads' lists in thread order keeps the load sums reproducible.
-  void reflect_ghosts() {
-    for (const auto& list : ghosts_)
-      for (const Ghost& gh : list) {
-        int blk[D];
-        bool ok = true;
-        for (int d = 0; d < D; ++d) {
-          ok &= gh.offset[d] >= 0;
-          blk[d] = gh.offset[d] / kBlock;
-        }
-        if (!ok) continue;
-        const auto it = std::lower_bound(gkeys_.begin(), gkeys_.end(), pack_key<D>(blk));
-        if (it == gkeys_.end() || *it != pack_key<D>(blk)) continue;
-        int local = 0;
-        for (int d = 0; d < D; ++d) local = local * kBlock + gh.offset[d] % kBlock;
-        const size_t mi = static_cast<size_t>(it - gkeys_.begin()) * kNodes + local;
-        if (gm_[mi] <= T(0) || gwall_[mi]) continue;
-        T v[D], vm[D];
-        for (int d = 0; d < D; ++d) {
-          v[d] = gv_[d][gh.idx];
-          vm[d] = gv_[d][mi];
-        }
-        T old[D];
-        for (int d = 0; d < D; ++d) old[d] = v[d];
-        mpm::ghost_velocity<D>(v, vm, gh.axes);
-        for (int d = 0; d < D; ++d) {
-          gv_[d][gh.idx] = v[d];
-          if (gh.wall >= 0) load_impulse_[gh.wall * D + d] += double(gm_[gh.idx]) * (double(old[d]) - double(v[d]));
-        }
-      }
   }
 
   // Whether a debris box may come within `margin` of the block's particles (a particle may sit up to one cell
@@ -1159,7 +1087,6 @@ class MpmSolver final : public Simulation {
   std::unique_ptr<DebrisCoupling> debris_;
   std::unique_ptr<InflowBoundary<D, T>> inflow_;
   std::vector<T> tag_;  // the inflow's buffer particles (1) and free water (0); empty without an inflow
-  std::vector<std::vector<Ghost>> ghosts_;  // per thread: this step's ghost nodes (reflect_ghosts)
   std::vector<std::vector<CouplingNode>> coupling_;  // per thread: the nodes found in boxes this step
   std::vector<double> push_out_;  // per particle block and box: impulse and moment of pushed-out particles
   // Nodes up to one cell outside a box are its moving-wall nodes: then a water particle touching the box puts
