@@ -206,10 +206,10 @@ class InstrumentSet {
     const int up = D - 1;
     const double dx = scene_.solver.dx, inv_dx = 1.0 / dx;
     const size_t k = static_cast<size_t>(&g - scene_.instruments.gauges.data());
-    const double floor = ground_[k] - 0.25 * dx;  // water below the ground here is beside the gauge, not under it
+    const double lowest = ground_[k] - 0.25 * dx;  // water below the ground here is beside the gauge, not under it
     double weight = 0;
     for (size_t i = 0; i < s.n(); ++i) {
-      if (double(s.x(up, i)) < floor) continue;
+      if (double(s.x(up, i)) < lowest) continue;
       double w = 1;
       for (int d = 0; d < up && w > 0; ++d) w *= bspline_weight((double(s.x(d, i)) - g.position[d]) * inv_dx);
       weight += w;
