@@ -553,12 +553,6 @@ class MpmSolver final : public Simulation {
     return map;
   }
 
-  static int tile_index(const int* a) {
-    int idx = 0;
-    for (int d = 0; d < D; ++d) idx = idx * kTile + a[d];
-    return idx;
-  }
-
   // P2G: each particle block scatters mass, momentum (with the MLS-MPM stress term) and mass-weighted strain J - 1
   // into its private tile, node-major with kLanes channels per node.
   void p2g(T dt) {
