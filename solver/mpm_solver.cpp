@@ -247,7 +247,6 @@ class MpmSolver final : public Simulation {
   size_t n() const { return n_; }
   T x(int d, size_t i) const { return x_[d][i]; }
   T v(int d, size_t i) const { return v_[d][i]; }
-  double particle_spacing() const { return spacing_; }
   double particle_mass() const { return mp_; }
   double max_speed() const { return max_speed_; }
 

@@ -613,7 +613,6 @@ class MpmCuda final : public Simulation {
     if (!host_fresh_) sync_host();
     return hv_[d][i];
   }
-  double particle_spacing() const { return spacing_; }
   double particle_mass() const { return mp_; }
   double max_speed() const { return max_speed_; }
 
