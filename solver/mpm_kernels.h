@@ -51,57 +51,99 @@ FLUME_HD int stencil_base(T x_grid, T& f) {
 // e ~ -1e-4 at K = 2e7 Pa, which 1 + e stored in float would resolve to only three digits, and a step's
 // change (~1e-8) would be lost entirely. Every function below takes e and stays accurate as e -> 0.
 
-// The exponent gamma is an integer for water in practice (7, Monaghan's value and the scenes' default), and
-// then J^n needs no transcendental function: P = (1 + e)^n - 1 and R = P - n e follow from e alone by
-// P_{k+1} = P_k + e + e P_k and R_{k+1} = R_k + e P_k, which never form a quantity of size 1 next to a small one,
-// so both keep the relative precision of e (the libm expm1/log1p pair cost a fifth of a CPU step).
-// The largest exponent taken this way; larger or non-integer exponents use expm1/log1p.
-constexpr int kTaitMaxIntegerGamma = 20;
+// The exponent gamma is an integer for water in practice (7, Monaghan's value and the scenes' default) or a
+// short binary fraction (7.125 = 57/8, the value ClaymoreUW's Waseda twin uses and the Waseda scenes copy), and
+// then J^gamma needs no transcendental function. With gamma = m / 2^k (k <= 3): x = J^(1/2^k) - 1 by k halvings
+// x <- x / (1 + sqrt(1 + x)), then (1 + x)^m by binary powering, carrying P_a = (1 + x)^a - 1 and
+// R_a = P_a - a x with P_{a+b} = P_a + P_b + P_a P_b and R_{a+b} = R_a + R_b + P_a P_b: no step forms a quantity
+// of size 1 next to a small one, so P = J^gamma - 1 and R = J^gamma - 1 - gamma e keep the relative precision of
+// e (the libm expm1/log1p pair they replace cost a fifth of a CPU step). R needs x - e/2^k, which each halving
+// gives exactly as well: x_j - x_{j-1}/2 = -x_j^2/2.
+// Other exponents (not m / 2^k with k <= 3, or m above the limit) use expm1/log1p.
+constexpr int kTaitMaxHalvings = 3;
+constexpr int kTaitMaxNumerator = 255;
+// m with gamma = m / 2^halvings exactly (the smallest such halvings), or 0 when gamma takes the libm path.
 template <typename T>
-FLUME_HD int tait_integer_gamma(T gamma) {
-  const int n = static_cast<int>(gamma);
-  return T(n) == gamma && n >= 1 && n <= kTaitMaxIntegerGamma ? n : 0;
-}
-// Q = J^n is the product of n factors 1 + e: relatively exact, and the denominator that 1 + P would not be when
-// the water is compressed far (e -> -1, P -> -1).
-template <typename T>
-FLUME_HD void tait_powers(T e, int n, T& P, T& R, T& Q) {
-  P = e;
-  R = T(0);
-  Q = T(1) + e;
-  const T J = Q;
-  for (int k = 1; k < n; ++k) {
-    R += e * P;
-    P += e + e * P;
-    Q *= J;
+FLUME_HD int tait_dyadic_gamma(T gamma, int& halvings) {
+  for (int k = 0; k <= kTaitMaxHalvings; ++k) {
+    const T scaled = gamma * T(1 << k);  // exact: a power of two
+    const int m = static_cast<int>(scaled);
+    if (T(m) == scaled && m >= 1 && m <= kTaitMaxNumerator) {
+      halvings = k;
+      return m;
+    }
   }
+  halvings = 0;
+  return 0;
+}
+// P = J^gamma - 1, R = J^gamma - 1 - gamma e, Q = J^gamma (the relatively exact denominator that 1 + P would not
+// be when the water is compressed far, e -> -1, P -> -1). False, and nothing set, on the libm path.
+template <typename T>
+FLUME_HD bool tait_powers(T e, T gamma, T& P, T& R, T& Q) {
+  int k = 0;
+  const int m = tait_dyadic_gamma(gamma, k);
+  if (m == 0) return false;
+  // x_j = e / prod_{i <= j} (1 + J^(1/2^i)): the roots of the rounded J are good to an epsilon next to 1, so the
+  // product is relatively exact and one division serves all k halvings.
+  T x = e, c = T(0);  // c = x - e / 2^k
+  if (k > 0) {
+    T root[kTaitMaxHalvings], D = T(1), r = T(1) + e;
+    for (int j = 0; j < k; ++j) {
+      r = std::sqrt(r);
+      root[j] = T(1) + r;
+      D *= root[j];
+    }
+    x = e / D;
+    T xj = x;  // x_k, x_{k-1}, ... by x_{j-1} = x_j (1 + J^(1/2^j)); c = -sum_j x_j^2 / 2^(k-j+1)
+    T w = T(0.5);
+    for (int j = k - 1; j >= 0; --j) {
+      c -= w * xj * xj;
+      xj *= root[j];
+      w *= T(0.5);
+    }
+  }
+  T Pa = x, Ra = T(0), Qa = T(1) + x;  // (1 + x)^a for a = 1, 2, 4, ...
+  T Pm = T(0), Rm = T(0), Qm = T(1);   // the product of the powers taken so far: a = 0 to start
+  for (int rest = m;;) {
+    if (rest & 1) {
+      const T PP = Pm * Pa;
+      Pm += Pa + PP;
+      Rm += Ra + PP;
+      Qm *= Qa;
+    }
+    rest >>= 1;
+    if (rest == 0) break;
+    const T PP = Pa * Pa;
+    Pa = T(2) * Pa + PP;
+    Ra = T(2) * Ra + PP;
+    Qa *= Qa;
+  }
+  P = Pm;
+  R = Rm + T(m) * c;  // P - m x + m (x - e / 2^k)
+  Q = Qm;
+  return true;
 }
 
-// Tait/Murnaghan pressure p = K/gamma (J^-gamma - 1): with an integer exponent -K/gamma P/(1 + P), otherwise
-// K/gamma expm1(-gamma log1p(e)).
+// Tait/Murnaghan pressure p = K/gamma (J^-gamma - 1) = -K/gamma P/Q; on the libm path K/gamma
+// expm1(-gamma log1p(e)).
 template <typename T>
 FLUME_HD T tait_pressure(T e, T bulk_modulus, T gamma) {
-  if (const int n = tait_integer_gamma(gamma)) {
-    T P, R, Q;
-    tait_powers(e, n, P, R, Q);
-    return -bulk_modulus / gamma * P / Q;
-  }
+  T P, R, Q;
+  if (tait_powers(e, gamma, P, R, Q)) return -bulk_modulus / gamma * P / Q;
   return bulk_modulus / gamma * std::expm1(-gamma * std::log1p(e));
 }
 
 // Stored energy per unit reference volume whose derivative with respect to J is -p:
-// W = K/gamma [(J^(1-gamma) - 1)/(gamma - 1) + J - 1]; gamma = 1 is the limit K (J - 1 - ln J). With an integer
-// exponent n >= 2, J^(1-n) - 1 = (e - P)/J^n and the bracket is ((n - 1) e P - R) / ((n - 1) J^n), whose
-// leading terms n (n - 1) e^2 and n (n - 1) e^2 / 2 cancel only by half. Used by the energy audit that flags an
+// W = K/gamma [(J^(1-gamma) - 1)/(gamma - 1) + J - 1]; gamma = 1 is the limit K (J - 1 - ln J). With J^(1-gamma) - 1
+// = (e - P)/J^gamma the bracket is ((gamma - 1) e P - R) / ((gamma - 1) J^gamma), whose leading terms
+// gamma (gamma - 1) e^2 and gamma (gamma - 1) e^2 / 2 cancel only by half. Used by the energy audit that flags an
 // unstable run.
 template <typename T>
 FLUME_HD T tait_energy_density(T e, T bulk_modulus, T gamma) {
   if (std::fabs(gamma - T(1)) < T(1e-6)) return bulk_modulus * (e - std::log1p(e));
-  if (const int n = tait_integer_gamma(gamma)) {
-    T P, R, Q;
-    tait_powers(e, n, P, R, Q);
+  T P, R, Q;
+  if (tait_powers(e, gamma, P, R, Q))
     return bulk_modulus / (gamma * (gamma - T(1))) * ((gamma - T(1)) * e * P - R) / Q;
-  }
   return bulk_modulus / gamma * (std::expm1((T(1) - gamma) * std::log1p(e)) / (gamma - T(1)) + e);
 }
 
@@ -258,6 +300,56 @@ FLUME_HD T half_space_distance(const T* x, const T* point, const T* n, T* normal
     normal[a] = n[a];
   }
   return d;
+}
+
+// Which analytic wall holds grid node x, and through which face normals: a node on or in the wall (within
+// 1e-6 dx) is held, any other is free. Decided in double: walls usually sit on grid lines, and in float the node on
+// the wall would fall on either side of it by round-off (a float column lost 70% of its corner pressure in five
+// steps that way).
+//
+// A node inside a box is held by every face within two cells of it, not only by the nearest: near the quay's top
+// edge the nearest face is the top, and a node constrained by it alone would let the basin's water flow sideways
+// into the wall. Inside a thin wall, such as the gate panel, both faces hold it. Returns the number of normals
+// written to n (0: the node is free).
+//
+// So a wall face between two grid lines acts from the next node inside it: at dx = 0.02 m a gate opening of
+// 0.081 m and one of 0.099 m are the same grid (docs/calibration.md). Holding the node outside the face in part,
+// by the fraction of the cell the wall covers, was tried and does not make the response continuous: a node held
+// by a quarter, every step, blocks nearly as much as one held fully, as the particles passing it carry the loss
+// from step to step.
+template <int D>
+FLUME_HD int wall_faces(const double* x, bool box, const double* a, const double* b, double dx, double (*n)[D]) {
+  const double tol = 1e-6 * dx;
+  double nd[D];
+  const double dist = box ? box_distance<D>(x, a, b, nd) : half_space_distance<D>(x, a, b, nd);
+  if (dist > tol) return 0;
+  if (!box) {
+    for (int d = 0; d < D; ++d) n[0][d] = nd[d];
+    return 1;
+  }
+  int count = 0;
+  for (int ax = 0; ax < D; ++ax)
+    for (int side = 0; side < 2; ++side) {
+      const double depth = side == 0 ? x[ax] - a[ax] : b[ax] - x[ax];  // distance in from this face
+      if (depth > 2 * dx) continue;
+      for (int d = 0; d < D; ++d) n[count][d] = d == ax ? (side == 0 ? -1.0 : 1.0) : 0.0;
+      ++count;
+    }
+  if (count == 0) {  // deep inside: the nearest face
+    for (int d = 0; d < D; ++d) n[0][d] = nd[d];
+    count = 1;
+  }
+  return count;
+}
+
+// A wall's action on a held grid node's velocity: the projection through each of its faces (project_velocity).
+template <int D, typename T>
+FLUME_HD void apply_wall(T* v, const double (*n)[D], int faces, const T* vb, Bc bc, T mu) {
+  for (int f = 0; f < faces; ++f) {
+    T nf[D];
+    for (int d = 0; d < D; ++d) nf[d] = T(n[f][d]);
+    project_velocity<D>(v, nf, vb, bc, mu);
+  }
 }
 
 }  // namespace flume::mpm

@@ -25,6 +25,7 @@
 #include "solver/inflow.h"
 #include "solver/instruments.h"
 #include "solver/mpm_kernels.h"
+#include "solver/seeding.h"
 #include "solver/simulation.h"
 
 namespace flume {
@@ -277,62 +278,23 @@ class MpmSolver final : public Simulation {
     spacing_ = dx_ / per_axis;
     v0_ = std::pow(spacing_, D);
     mp_ = scene_.fluid.density * v0_;
-    std::vector<double> pos[D], strain;
-    std::vector<T> held;
-    for (size_t w = 0; w < scene_.water.size(); ++w) {
-      const auto& box = scene_.water[w];
-      long count[D];
-      for (int d = 0; d < D; ++d) count[d] = std::max(1L, std::lround((box.hi[d] - box.lo[d]) / spacing_));
-      long total = 1;
-      for (int d = 0; d < D; ++d) total *= count[d];
-      for (long k = 0; k < total; ++k) {
-        long r = k;
-        double p[D];
-        for (int d = D - 1; d >= 0; --d) {
-          const long idx = r % count[d];
-          r /= count[d];
-          p[d] = box.lo[d] + (idx + 0.5) * (box.hi[d] - box.lo[d]) / count[d];
-        }
-        // Overlapping water boxes would double the water: keep a point only for its first box.
-        bool dup = false;
-        for (size_t u = 0; u < w && !dup; ++u) {
-          bool in = true;
-          for (int d = 0; d < D; ++d) in &= p[d] >= scene_.water[u].lo[d] && p[d] < scene_.water[u].hi[d];
-          dup = in;
-        }
-        if (dup) continue;
-        // Water is not seeded inside a debris box: the box displaces it.
-        if (debris_) {
-          double x3[3] = {0, 0, 0}, nn[3];
-          for (int d = 0; d < D; ++d) x3[d] = p[d];
-          if (debris_->locate(x3, 0.0, nn) >= 0) continue;
-        }
-        for (int d = 0; d < D; ++d) pos[d].push_back(p[d]);
-        // Hydrostatic start: invert p = K/gamma (J^-gamma - 1) for the strain e = J - 1.
-        double e = 0;
-        if (box.hydrostatic) {
-          const double head = std::max(0.0, box.surface - p[D - 1]);
-          const double pressure = scene_.fluid.density * std::fabs(scene_.solver.gravity[D - 1]) * head;
-          const double g = scene_.fluid.gamma;
-          e = std::expm1(-std::log1p(g * pressure / scene_.fluid.bulk_modulus) / g);
-        }
-        strain.push_back(e);
-        // The reservoir's water above still-water level is what the vacuum holds (issue 3).
-        const auto& B = scene_.basin;
-        held.push_back(B.present && B.forcing.model != ForcingModel::kNone && p[0] < B.reservoir_length_m &&
-                               p[D - 1] > B.still_water_m
-                           ? T(1)
-                           : T(0));
-      }
-    }
-    n_ = pos[0].size();
+    // Water is not seeded inside a debris box: the box displaces it.
+    std::function<bool(const double*)> displaced;
+    if (debris_)
+      displaced = [this](const double* p) {
+        double x3[3] = {0, 0, 0}, nn[3];
+        for (int d = 0; d < D; ++d) x3[d] = p[d];
+        return debris_->locate(x3, 0.0, nn) >= 0;
+      };
+    const Seeds seeds = seed_water<D>(scene_, spacing_, displaced);
+    n_ = seeds.size();
     for (int d = 0; d < D; ++d) {
-      x_[d].assign(pos[d].begin(), pos[d].end());
+      x_[d].assign(seeds.x[d].begin(), seeds.x[d].end());
       v_[d].assign(n_, T(0));
     }
     for (int k = 0; k < D * D; ++k) C_[k].assign(n_, T(0));
-    e_.assign(strain.begin(), strain.end());
-    if (std::any_of(held.begin(), held.end(), [](T h) { return h > T(0); })) held_.swap(held);
+    e_.assign(seeds.strain.begin(), seeds.strain.end());
+    if (seeds.any_held) held_.assign(seeds.held.begin(), seeds.held.end());
     mass_ = mp_ * n_;
   }
 
@@ -496,41 +458,6 @@ class MpmSolver final : public Simulation {
   T wall_distance(const Wall& w, const T* x, T* n) const {
     return w.box ? mpm::box_distance<D>(x, w.a, w.b, n) : mpm::half_space_distance<D>(x, w.a, w.b, n);
   }
-  // Whether grid node `node` lies in or on the wall (within 1e-6 dx), and the wall's normal there. Walls
-  // usually sit on grid lines; computed in float, the node on the wall would fall on either side of it by
-  // round-off and the wall would leak or grip at random (a float column lost 70% of its corner pressure
-  // in five steps that way).
-  //
-  // A node inside a box is held by every face within two cells of it, not only by the nearest: near the
-  // quay's top edge the nearest face is the top, and a node constrained by it alone would let the basin's
-  // water flow sideways into the wall. Inside a thin wall, such as the gate panel, both faces hold it.
-  // Returns the number of normals written to n.
-  int node_in_wall(const Wall& w, const int* node, T (*n)[D]) const {
-    double x[D], nd[D];
-    for (int d = 0; d < D; ++d) x[d] = grid_lo_[d] + node[d] * dx_;
-    const double tol = 1e-6 * dx_;
-    if (!w.box) {
-      const double dist = mpm::half_space_distance<D>(x, w.ad, w.bd, nd);
-      for (int d = 0; d < D; ++d) n[0][d] = T(nd[d]);
-      return dist <= tol ? 1 : 0;
-    }
-    const double dist = mpm::box_distance<D>(x, w.ad, w.bd, nd);
-    if (dist > tol) return 0;
-    int count = 0;
-    for (int a = 0; a < D; ++a)
-      for (int side = 0; side < 2; ++side) {
-        const double depth = side == 0 ? x[a] - w.ad[a] : w.bd[a] - x[a];  // distance in from this face
-        if (depth > 2 * dx_) continue;
-        for (int d = 0; d < D; ++d) n[count][d] = T(d == a ? (side == 0 ? -1 : 1) : 0);
-        ++count;
-      }
-    if (count == 0) {  // deep inside: the nearest face
-      for (int d = 0; d < D; ++d) n[0][d] = T(nd[d]);
-      count = 1;
-    }
-    return count;
-  }
-
   // For each node of a particle block's tile: which of the 3^D neighbouring grid blocks holds it, and where.
   struct TileNode {
     int block, local;
@@ -709,15 +636,17 @@ class MpmSolver final : public Simulation {
           for (int d = 0; d < D; ++d) v[d] = acc[k][1 + d] / m + dt * gravity_[d];
           uint8_t on_wall = 0;
           // Scene boundaries reaching this block.
+          double xn[D];
+          for (int d = 0; d < D; ++d) xn[d] = grid_lo_[d] + node[d] * dx_;
           for (uint32_t q = g_bnd_start_[g]; q < g_bnd_start_[g + 1]; ++q) {
             const Wall& w = walls_[g_bnd_[q]];
-            T n[2 * D][D];
-            const int faces = node_in_wall(w, node, n);
+            double n[2 * D][D];
+            const int faces = mpm::wall_faces<D>(xn, w.box, w.ad, w.bd, dx_, n);
             if (!faces) continue;
             on_wall = 1;
             T before[D];
             for (int d = 0; d < D; ++d) before[d] = v[d];
-            for (int f = 0; f < faces; ++f) mpm::project_velocity<D>(v, n[f], w.vb, w.bc, w.mu);
+            mpm::apply_wall<D>(v, n, faces, w.vb, w.bc, w.mu);
             for (int d = 0; d < D; ++d) my_impulse[g_bnd_[q] * D + d] += double(m) * (before[d] - v[d]);
           }
           // The domain box is a container: nodes on or beyond its faces are walls.

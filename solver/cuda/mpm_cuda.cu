@@ -49,6 +49,7 @@
 #include "solver/cuda/mpm_cuda.h"
 #include "solver/instruments.h"
 #include "solver/mpm_kernels.h"
+#include "solver/seeding.h"
 #include "solver/simulation.h"
 
 namespace flume {
@@ -114,6 +115,7 @@ struct View {
   T* v[D];
   T* C[D * D];
   T* e;
+  const T* held;  // 1 for water the reservoir's vacuum holds; null when nothing is held
   double* fill_work;  // per particle: the elastic energy the volume constraint added this step (J)
   const int32_t* pblk;  // index of the particle's (sorted) block in pkeys
   // blocks and grid
@@ -184,6 +186,7 @@ template <int D, typename T>
 struct P2G {
   View<D, T> s;
   T dt;
+  T lift;  // the vacuum's hold on a held particle this step: dt f(t) m |g| (upward momentum)
   FLUME_HD void operator()(size_t i) const {
     const T dx = s.dx, m = s.mp;
     const T stress_scale = -dt * s.v0 * T(4) * s.inv_dx * s.inv_dx;
@@ -209,6 +212,7 @@ struct P2G {
       mom0[a] = sum;
       xp[a] = s.x[a][i];
     }
+    if (s.held) mom0[D - 1] += s.held[i] * lift;
     const T mJ = m * (e - mpm::hydrostatic_strain<D>(xp, s.strain_slope));
     const T vol = s.v0 * (T(1) + e);
     constexpr int kStencil = mpm::Pow<D>::of(3);
@@ -256,17 +260,13 @@ struct GridUpdate {
     for (int d = 0; d < D; ++d) xn[d] = s.grid_lo_d[d] + node[d] * s.dx_d;
     for (int k = 0; k < s.n_walls; ++k) {
       const Wall<D, T>& w = s.walls[k];
-      double nd[D];
-      const double dist =
-          w.box ? mpm::box_distance<D>(xn, w.a, w.b, nd) : mpm::half_space_distance<D>(xn, w.a, w.b, nd);
-      if (!(dist <= 1e-6 * s.dx_d)) continue;
-      T n[D], before[D];
-      for (int d = 0; d < D; ++d) {
-        n[d] = T(nd[d]);
-        before[d] = v[d];
-      }
+      double n[2 * D][D];
+      const int faces = mpm::wall_faces<D>(xn, w.box != 0, w.a, w.b, s.dx_d, n);
+      if (!faces) continue;
       on_wall = 1;
-      mpm::project_velocity<D>(v, n, w.vb, static_cast<mpm::Bc>(w.bc), w.mu);
+      T before[D];
+      for (int d = 0; d < D; ++d) before[d] = v[d];
+      mpm::apply_wall<D>(v, n, faces, w.vb, static_cast<mpm::Bc>(w.bc), w.mu);
       if (s.impulse)
         for (int d = 0; d < D; ++d) atomic_add(&s.impulse[k * D + d], double(m) * (before[d] - v[d]));
     }
@@ -487,7 +487,9 @@ class MpmCuda final : public Simulation {
     thr::fill(thr::device, grid_.begin(), grid_.end(), T(0));
     if (has_loads_) thr::fill(thr::device, impulse_.begin(), impulse_.end(), 0.0);
     thr::counting_iterator<size_t> first(0);
-    thr::for_each(thr::device, first, first + n_, P2G<D, T>{s, T(dt)});
+    // The vacuum's hold: an upward force f(t) m |g| on the held water (as MpmSolver::p2g).
+    const T lift = T(double(dt) * mp_ * scene_.basin.forcing.hold(time_) * std::fabs(scene_.solver.gravity[D - 1]));
+    thr::for_each(thr::device, first, first + n_, P2G<D, T>{s, T(dt), lift});
     thr::for_each(thr::device, first, first + s.nodes, GridUpdate<D, T>{s, T(dt)});
     if (has_loads_) thr::copy(impulse_.begin(), impulse_.end(), load_impulse_.begin());
     thr::for_each(thr::device, first, first + n_, G2P<D, T>{s, T(dt), T(mpm::fill_rate(dt, c_, dx_))});
@@ -635,46 +637,20 @@ class MpmCuda final : public Simulation {
     spacing_ = dx_ / per_axis;
     v0_ = std::pow(spacing_, D);
     mp_ = scene_.fluid.density * v0_;
-    std::vector<T> pos[D], strain;
-    for (size_t w = 0; w < scene_.water.size(); ++w) {
-      const auto& box = scene_.water[w];
-      long count[D];
-      for (int d = 0; d < D; ++d) count[d] = std::max(1L, std::lround((box.hi[d] - box.lo[d]) / spacing_));
-      long total = 1;
-      for (int d = 0; d < D; ++d) total *= count[d];
-      for (long k = 0; k < total; ++k) {
-        long r = k;
-        double p[D];
-        for (int d = D - 1; d >= 0; --d) {
-          const long idx = r % count[d];
-          r /= count[d];
-          p[d] = box.lo[d] + (idx + 0.5) * (box.hi[d] - box.lo[d]) / count[d];
-        }
-        bool dup = false;
-        for (size_t u = 0; u < w && !dup; ++u) {
-          bool in = true;
-          for (int d = 0; d < D; ++d) in &= p[d] >= scene_.water[u].lo[d] && p[d] < scene_.water[u].hi[d];
-          dup = in;
-        }
-        if (dup) continue;
-        for (int d = 0; d < D; ++d) pos[d].push_back(T(p[d]));
-        double e = 0;
-        if (box.hydrostatic) {
-          const double head = std::max(0.0, box.surface - p[D - 1]);
-          const double pressure = scene_.fluid.density * std::fabs(scene_.solver.gravity[D - 1]) * head;
-          const double g = scene_.fluid.gamma;
-          e = std::expm1(-std::log1p(g * pressure / scene_.fluid.bulk_modulus) / g);
-        }
-        strain.push_back(T(e));
-      }
-    }
-    n_ = pos[0].size();
+    const Seeds seeds = seed_water<D>(scene_, spacing_);
+    n_ = seeds.size();
     for (int d = 0; d < D; ++d) {
-      x_[d].assign(pos[d].begin(), pos[d].end());
+      const std::vector<T> xd(seeds.x[d].begin(), seeds.x[d].end());
+      x_[d].assign(xd.begin(), xd.end());
       v_[d].assign(n_, T(0));
     }
     for (int k = 0; k < D * D; ++k) C_[k].assign(n_, T(0));
+    const std::vector<T> strain(seeds.strain.begin(), seeds.strain.end());
     e_.assign(strain.begin(), strain.end());
+    if (seeds.any_held) {
+      const std::vector<T> held(seeds.held.begin(), seeds.held.end());
+      held_.assign(held.begin(), held.end());
+    }
     fill_work_.assign(e_.size(), 0.0);
     mass_ = mp_ * n_;
     pblk_.resize(n_);
@@ -720,6 +696,7 @@ class MpmCuda final : public Simulation {
     }
     for (int k = 0; k < D * D; ++k) s.C[k] = raw(C_[k]);
     s.e = raw(e_);
+    s.held = held_.empty() ? nullptr : raw(held_);
     s.fill_work = raw(fill_work_);
     s.pblk = raw(pblk_);
     s.pkeys = raw(pkeys_);
@@ -763,6 +740,7 @@ class MpmCuda final : public Simulation {
     }
     for (int k = 0; k < D * D; ++k) permute(C_[k]);
     permute(e_);
+    if (!held_.empty()) permute(held_);
     // Particle blocks, and each particle's block index.
     pkeys_.resize(n_);
     pkeys_.resize(thr::unique_copy(thr::device, keys_.begin(), keys_.end(), pkeys_.begin()) - pkeys_.begin());
@@ -865,7 +843,7 @@ class MpmCuda final : public Simulation {
   double spacing_ = 0, v0_ = 0, mp_ = 0, mass_ = 0;
   size_t n_ = 0;
   // device: particles (e: volumetric strain J - 1), sort scratch, blocks, grid, walls
-  thr::device_vector<T> x_[D], v_[D], C_[D * D], e_, tmp_;
+  thr::device_vector<T> x_[D], v_[D], C_[D * D], e_, held_, tmp_;
   thr::device_vector<int32_t> pblk_, p_nbr_;
   thr::device_vector<uint32_t> order_;
   thr::device_vector<uint64_t> keys_, pkeys_, gkeys_, nbr_keys_;

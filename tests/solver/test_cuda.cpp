@@ -271,6 +271,13 @@ TEST(CudaEmulation, MartinMoyce2DDoubleMatchesCpu) {
   expect_within(compare(martin_moyce(kA / 10, "double"), cpu, emulated), double_bounds(kA / 10, 2 * kA));
 }
 TEST(CudaEmulation, InstabilityMatchesCpu) { expect_same_instability(emulated); }
+// The Waseda basin's boxes: a node inside the 0.04 m gate panel is held by both of its faces, one at the quay's
+// top edge by the top and the front (mpm::wall_faces); the bore passes the gate within the 0.8 s.
+TEST(CudaEmulation, WasedaGateAndQuay2DDoubleMatchesCpu) {
+  const Scene s = load_scene(source_dir() + "/scenes/waseda/waseda_2d.json",
+                             {{"solver.dx", "0.04"}, {"solver.precision", "double"}, {"solver.end_time", "0.8"}});
+  expect_within(compare(s, cpu, emulated), double_bounds(0.04, 0.9));
+}
 TEST(CudaEmulation, HydrostaticColumn2DFloatMatchesCpu) {
   expect_within(compare(column(2, "float", 0.2), cpu, emulated), float_bounds(0.01, 0.2));
 }
