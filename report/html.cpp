@@ -8,6 +8,7 @@
 
 #include "common/plot/figure.h"
 #include "flume_version.h"
+#include "report/map.h"
 #include "report/report.h"
 
 namespace flume::report {
@@ -83,30 +84,6 @@ void runs_section(std::ostringstream& h, const Report& r) {
   h << "</section>\n";
 }
 
-void apron_base(plot::Axes& ax, const ApronGeometry& g) {
-  ax.equal_aspect()
-      .xlim(g.quay_x_m - 0.6, g.end_x_m)
-      .ylim(g.y_lo_m, g.y_hi_m)
-      .xlabel("x downstream [m]")
-      .ylabel("y across [m]");
-  ax.rect(g.quay_x_m - 0.6, g.y_lo_m, g.quay_x_m, g.y_hi_m,
-          {.color = plot::Color{86, 180, 233}, .opacity = 0.15});
-  ax.rect(g.quay_x_m, g.y_lo_m, g.end_x_m, g.y_hi_m, {.color = plot::Color{200, 200, 200}, .opacity = 0.25});
-  ax.vline(g.quay_x_m, {.color = plot::Color{60, 60, 60}, .width = 2.0});
-  for (const auto& o : g.obstacles)
-    ax.rect(o.x0, o.y0, o.x1, o.y1, {.color = plot::Color{40, 40, 40}, .opacity = 0.9});
-}
-
-// A cone from the apex downstream to the back wall, half-angle `deg`.
-void cone(plot::Axes& ax, const DebrisGroup& g, double deg, const plot::Color& c, plot::Dash dash,
-          const std::string& label) {
-  const double L = g.geometry.end_x_m - g.apex_x, t = std::tan(deg * M_PI / 180.0);
-  ax.polygon({g.apex_x, g.geometry.end_x_m, g.geometry.end_x_m},
-             {g.apex_y, g.apex_y - L * t, g.apex_y + L * t}, {.color = c, .opacity = 0.06});
-  ax.line({g.geometry.end_x_m, g.apex_x, g.geometry.end_x_m}, {g.apex_y - L * t, g.apex_y, g.apex_y + L * t},
-          {.color = c, .width = 1.5, .dash = dash, .label = label});
-}
-
 void debris_section(std::ostringstream& h, const Report& r) {
   h << "<section id=debris><h2>Debris spreading</h2>\n";
   if (r.debris.groups.empty()) {
@@ -131,11 +108,12 @@ void debris_section(std::ostringstream& h, const Report& r) {
       std::snprintf(title, sizeof title,
                     "Top-down apron: run-up and rest positions of every debris (%zu runs)", drawn);
       ax.title(title);
-      apron_base(ax, g.geometry);
-      cone(ax, g, kNaitoSpreadingDeg, kVermillion, plot::Dash::kDashed, "Naito 22.5 deg");
+      draw_apron(ax, g.geometry);
+      draw_cone(ax, g.apex_x, g.apex_y, g.geometry.end_x_m, kNaitoSpreadingDeg, kVermillion, plot::Dash::kDashed,
+                "Naito 22.5 deg");
       char lab[64];
       std::snprintf(lab, sizeof lab, "Nistor eq. 59: %.2f deg", theta_n);
-      cone(ax, g, theta_n, kPurple, plot::Dash::kDotted, lab);
+      draw_cone(ax, g.apex_x, g.apex_y, g.geometry.end_x_m, theta_n, kPurple, plot::Dash::kDotted, lab);
       std::vector<double> x0, y0, xr, yr, xs, ys;
       for (std::size_t k = 0; k < drawn; ++k)
         for (const auto& db : g.runs[k].debris) {

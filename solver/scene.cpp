@@ -819,6 +819,7 @@ Scene parse_scene_text(const std::string& json_text, const std::string& file_lab
     throw InputError(file_label, "", std::string("not valid JSON: ") + e.what());
   }
   for (const auto& o : overrides) apply_override(root, o, file_label + " (--set " + o.path + ")");
+  const std::string source = root.dump();
   if (root.is_object() && root.contains("basin")) {
     if (!root.contains("dimension") || !root["dimension"].is_number_integer())
       throw InputError(file_label, "dimension", "is required (2 or 3)");
@@ -835,11 +836,13 @@ Scene parse_scene_text(const std::string& json_text, const std::string& file_lab
     sc.debris.layers = layout.layers;
     sc.debris.placement = layout.placement;
     sc.debris.row_x_m = layout.row_x_m;
+    sc.source_json = source;
     return sc;
   }
   Scene sc = parse(root, file_label);
   if (sc.inflow.present) load_inflow_record(sc);
   sc.debris.count = static_cast<int>(sc.debris.bodies.size());
+  sc.source_json = source;
   return sc;
 }
 
@@ -849,6 +852,19 @@ Scene load_scene(const std::string& file, const std::vector<Override>& overrides
   std::stringstream ss;
   ss << in.rdbuf();
   return parse_scene_text(ss.str(), file, overrides);
+}
+
+std::string scene_json_with_overrides(const std::string& file, const std::vector<Override>& overrides) {
+  std::ifstream in(file);
+  if (!in) throw InputError(file, "", "cannot open the scene file");
+  json root;
+  try {
+    root = json::parse(in);
+  } catch (const json::parse_error& e) {
+    throw InputError(file, "", std::string("not valid JSON: ") + e.what());
+  }
+  for (const auto& o : overrides) apply_override(root, o, file + " (--set " + o.path + ")");
+  return root.dump();
 }
 
 const char* to_string(BoundaryCondition c) {

@@ -159,6 +159,9 @@ struct InflowSettings {
 
 struct Scene {
   std::string file;  // where it was read from, for messages
+  // The scene as read, with the --set overrides applied (before a basin's expansion): written to run.json and
+  // result.h5, so that a run's outputs say what it ran.
+  std::string source_json;
   std::string name;
   int dimension = 3;
   Vec3d domain_lo{}, domain_hi{};
@@ -188,6 +191,10 @@ Override parse_override(const std::string& text);
 Scene load_scene(const std::string& file, const std::vector<Override>& overrides = {});
 Scene parse_scene_text(const std::string& json_text, const std::string& file_label,
                        const std::vector<Override>& overrides = {});
+
+// The scene file's JSON with the overrides applied, as text (what Scene::source_json holds), without
+// validating the scene: for tools that read a run's settings from its scene file and the --set it ran with.
+std::string scene_json_with_overrides(const std::string& file, const std::vector<Override>& overrides);
 
 const char* to_string(BoundaryCondition c);
 const char* to_string(Precision p);

@@ -589,3 +589,37 @@ TEST(ReportRender, HeadlessChromiumDrawsEverySectionWithoutScriptErrors) {
   ASSERT_TRUE(fs::exists(dir / "report.png"));
   EXPECT_GT(fs::file_size(dir / "report.png"), 50000u) << "a blank page would compress to almost nothing";
 }
+
+// `flume debris-paths`: a short coupled run of the Waseda strip (three containers, the reservoir still held)
+// drawn top-down with its guidelines; the table names each debris and the eq. 58 comparison for N = 3.
+TEST(DebrisPaths, DrawsARunsDebrisWithTheGuidelines) {
+  const fs::path dir = test_dir();
+  const Result r = run({FLUME_EXE, "run", std::string(FLUME_SOURCE_DIR) + "/scenes/waseda/waseda_strip.json", "--out",
+                        (dir / "strip").string(), "--set", "solver.end_time=0.1", "--threads", "1", "--quiet"},
+                       dir);
+  ASSERT_EQ(r.rc, 0) << r.err;
+  const Result p =
+      run({FLUME_EXE, "debris-paths", (dir / "strip").string(), "--out", (dir / "paths.svg").string()}, dir);
+  ASSERT_EQ(p.rc, 0) << p.err;
+  for (const char* want :
+       {"waseda_strip, obstacles 0x0, 3 debris", "D1", "D2", "D3", "Nistor eq. 58 (3.58 - 0.09 N) 3.310 m"})
+    EXPECT_NE(p.out.find(want), std::string::npos) << want << " in\n" << p.out;
+  const std::string svg = read_file(dir / "paths.svg");
+  for (const char* want : {"Naito 22.5 deg", "Nistor eq. 59: 6.09 deg", "Nistor eq. 58: 3.31 m", "initial"})
+    EXPECT_NE(svg.find(want), std::string::npos) << want;
+
+  // Bad input: a folder that is not a run, an option out of place; exit 2 and the file named.
+  const Result missing =
+      run({FLUME_EXE, "debris-paths", (dir / "nope").string(), "--out", (dir / "x.svg").string()}, dir);
+  EXPECT_EQ(missing.rc, 2);
+  EXPECT_NE(missing.err.find((dir / "nope" / "run.json").string()), std::string::npos) << missing.err;
+  const Result misplaced = run({FLUME_EXE, "debris-paths", "--set", "obstacles.layout=5x2", (dir / "strip").string(),
+                                "--out", (dir / "x.svg").string()},
+                               dir);
+  EXPECT_EQ(misplaced.rc, 2);
+  const Result recorded = run({FLUME_EXE, "debris-paths", (dir / "strip").string(), "--set", "obstacles.layout=5x2",
+                               "--out", (dir / "x.svg").string()},
+                              dir);
+  EXPECT_EQ(recorded.rc, 2) << "the run records its scene: a --set for it is refused";
+  EXPECT_FALSE(fs::exists(dir / "x.svg"));
+}

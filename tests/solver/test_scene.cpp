@@ -11,8 +11,11 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "common/errors.h"
 #include "solver/scene.h"
+#include "store/h5/run_file.h"
 #include "test_util.h"
 
 namespace flume {
@@ -113,6 +116,20 @@ TEST_F(SceneCli, ValidSceneIsAcceptedByCheckAndRun) {
   EXPECT_EQ(r.rc, kExitOk) << r.err;
   EXPECT_TRUE(fs::exists(dir_ / "out" / "result.h5"));
   EXPECT_TRUE(fs::exists(dir_ / "out" / "run.json"));
+}
+
+// A run's outputs say what it ran: the scene with the --set overrides applied, in run.json and result.h5.
+TEST_F(SceneCli, RunRecordsTheSceneWithItsOverrides) {
+  const std::string file = write("valid.json", kValid);
+  const fs::path out = dir_ / "out_set";
+  const CliResult r = flume("run " + file + " --out " + out.string() + " --quiet --set solver.end_time=0.005");
+  ASSERT_EQ(r.rc, kExitOk) << r.err;
+  const auto run = nlohmann::json::parse(test::read_text((out / "run.json").string()));
+  ASSERT_TRUE(run.contains("scene_json"));
+  EXPECT_DOUBLE_EQ(run["scene_json"]["solver"]["end_time"].get<double>(), 0.005);
+  EXPECT_EQ(run["scene_json"]["dimension"].get<int>(), 2);
+  const auto h5 = nlohmann::json::parse(h5::Reader((out / "result.h5").string()).string_attribute("/", "scene_json"));
+  EXPECT_EQ(h5, run["scene_json"]);
 }
 
 TEST_F(SceneCli, MissingRequiredField) {
