@@ -1,0 +1,37 @@
+#!/usr/bin/env bash
+# Issue 4 point 5: the Waseda apron fed by a 2D run, six upstream containers in two layers, and their top-down
+# paths with the Naito (2014) cone and the Nistor (2017) eq. 58/59 guidelines (docs/debris.md, "The Waseda apron").
+#   feed    scenes/waseda/waseda_2d.json at dx 0.02 m, 12 s: the section record at x = 4.35 m
+#   5x2     scenes/waseda/waseda_apron.json, 5x2 columns, dx = DX (0.02 m), END_TIME (7 s) simulated
+#   0x0     the same without obstacles at DX0 (0.03 m: the eq. 58 comparison; dx 0.02 did not fit the session)
+#   paths   flume debris-paths over both runs -> $OUT/debris_paths.svg and the metric tables
+# Usage: docs/debris_waseda_apron.sh [feed 5x2 0x0 paths]   (default: all four)
+# Environment: FLUME (build/bin/flume), OUT (debris-apron), THREADS (2), DX, DX0, END_TIME.
+# Cost on the 2-core VM: feed 110 s (1 thread); 5x2 about 45 min (2 threads); 0x0 at 0.03 m about 20 min.
+set -euo pipefail
+ROOT=$(cd "$(dirname "$0")/.." && pwd)
+FLUME=${FLUME:-$ROOT/build/bin/flume}
+OUT=${OUT:-$ROOT/debris-apron}
+THREADS=${THREADS:-2}
+DX=${DX:-0.02}
+DX0=${DX0:-0.03}
+END_TIME=${END_TIME:-7}
+STEPS=("$@")
+[ ${#STEPS[@]} -eq 0 ] && STEPS=(feed 5x2 0x0 paths)
+mkdir -p "$OUT"
+cd "$OUT"
+want() { for s in "${STEPS[@]}"; do [ "$s" = "$1" ] && return 0; done; return 1; }
+debris=(--set debris.count=6 --set debris.layers=2 --set debris.placement=upstream)
+if want feed; then
+  "$FLUME" run "$ROOT/scenes/waseda/waseda_2d.json" --out feed2d --set solver.dx=0.02 --set solver.end_time=12 \
+    --threads "$THREADS"
+fi
+apron() {  # apron NAME LAYOUT DX
+  "$FLUME" run "$ROOT/scenes/waseda/waseda_apron.json" --out "$1" --set solver.dx="$3" --set solver.end_time="$END_TIME" \
+    --set inflow.record=feed2d/result.h5 "${debris[@]}" --set obstacles.layout="$2" --threads "$THREADS"
+}
+want 5x2 && apron apron_5x2 5x2 "$DX"
+want 0x0 && apron apron_0x0 0x0 "$DX0"
+if want paths; then
+  "$FLUME" debris-paths apron_0x0 apron_5x2 --out debris_paths.svg | tee debris_paths.txt
+fi
