@@ -176,8 +176,8 @@ void draw_run(plot::Axes& ax, const RunPaths& r) {
     y0.push_back(p.y0);
   }
   ax.scatter(x0, y0, {.color = plot::Color{0, 0, 0}, .marker = plot::Marker::kSquare, .size = 5, .label = "initial"});
-  // Lower left: the basin and the apron behind the quay, where no debris goes.
-  ax.legend(plot::Legend::kLowerLeft);
+  // Upper left: above the field's start, outside the cones, where no debris goes.
+  ax.legend(plot::Legend::kUpperLeft);
 }
 
 void print_run(const RunPaths& r) {
