@@ -167,7 +167,8 @@ void draw_run(plot::Axes& ax, const RunPaths& r) {
     static const plot::Color colors[] = {plot::palette(0), plot::palette(1), plot::palette(2), plot::palette(5),
                                          plot::Color{140, 80, 20}, plot::Color{110, 110, 110}};
     const plot::Color c = colors[k % 6];
-    ax.line(p.x, p.y, {.color = c, .width = 1.2, .label = p.name});
+    ax.line(p.x, p.y, {.color = c, .width = 1.2});
+    ax.text(p.x_runup + 0.05, p.y_runup, p.name, {.size = 10.0, .color = c});  // named at its run-up, not in the legend
     ax.scatter({p.x_runup}, {p.y_runup},
                {.color = c, .marker = plot::Marker::kCircle, .size = 7, .label = k == 0 ? "run-up (circles)" : ""});
     ax.scatter({p.x_rest}, {p.y_rest},
