@@ -810,8 +810,11 @@ Override parse_override(const std::string& text) {
   return {text.substr(0, eq), text.substr(eq + 1)};
 }
 
-Scene parse_scene_text(const std::string& json_text, const std::string& file_label,
-                       const std::vector<Override>& overrides) {
+namespace {
+
+// The scene's JSON with the overrides applied, not yet validated.
+json parse_with_overrides(const std::string& json_text, const std::string& file_label,
+                          const std::vector<Override>& overrides) {
   json root;
   try {
     root = json::parse(json_text);
@@ -819,6 +822,22 @@ Scene parse_scene_text(const std::string& json_text, const std::string& file_lab
     throw InputError(file_label, "", std::string("not valid JSON: ") + e.what());
   }
   for (const auto& o : overrides) apply_override(root, o, file_label + " (--set " + o.path + ")");
+  return root;
+}
+
+std::string read_scene_file(const std::string& file) {
+  std::ifstream in(file);
+  if (!in) throw InputError(file, "", "cannot open the scene file");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+}  // namespace
+
+Scene parse_scene_text(const std::string& json_text, const std::string& file_label,
+                       const std::vector<Override>& overrides) {
+  json root = parse_with_overrides(json_text, file_label, overrides);
   const std::string source = root.dump();
   if (root.is_object() && root.contains("basin")) {
     if (!root.contains("dimension") || !root["dimension"].is_number_integer())
@@ -847,24 +866,11 @@ Scene parse_scene_text(const std::string& json_text, const std::string& file_lab
 }
 
 Scene load_scene(const std::string& file, const std::vector<Override>& overrides) {
-  std::ifstream in(file);
-  if (!in) throw InputError(file, "", "cannot open the scene file");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return parse_scene_text(ss.str(), file, overrides);
+  return parse_scene_text(read_scene_file(file), file, overrides);
 }
 
 std::string scene_json_with_overrides(const std::string& file, const std::vector<Override>& overrides) {
-  std::ifstream in(file);
-  if (!in) throw InputError(file, "", "cannot open the scene file");
-  json root;
-  try {
-    root = json::parse(in);
-  } catch (const json::parse_error& e) {
-    throw InputError(file, "", std::string("not valid JSON: ") + e.what());
-  }
-  for (const auto& o : overrides) apply_override(root, o, file + " (--set " + o.path + ")");
-  return root.dump();
+  return parse_with_overrides(read_scene_file(file), file, overrides).dump();
 }
 
 const char* to_string(BoundaryCondition c) {
