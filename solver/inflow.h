@@ -51,13 +51,14 @@ inline double hydrostatic_strain_at(double head_m, const FluidSettings& fluid, d
 }
 
 // The solver's particle arrays, as the inflow adds, moves and removes particles in them. `held` may be empty;
-// `tag` is 1 for buffer particles and 0 for free water.
+// `tag` is 1 for buffer particles and 0 for free water; `vol` is the reference volume (mass / rho).
 template <int D, typename T>
 struct ParticleArrays {
   std::vector<T>* x[D];
   std::vector<T>* v[D];
   std::vector<T>* C[D * D];
   std::vector<T>* e;
+  std::vector<T>* vol;
   std::vector<T>* held;
   std::vector<T>* tag;
   size_t size() const { return x[0]->size(); }
@@ -71,8 +72,8 @@ class InflowBoundary {
     double energy = 0;        // energy of the particles it set, added and removed: after minus before (J)
   };
 
-  InflowBoundary(const Scene& scene, double spacing, double particle_mass, ParticleArrays<D, T> a)
-      : f_(scene.inflow), fluid_(scene.fluid), a_(a), s_(spacing), mp_(particle_mass) {
+  InflowBoundary(const Scene& scene, double spacing, ParticleArrays<D, T> a)
+      : f_(scene.inflow), fluid_(scene.fluid), a_(a), s_(spacing) {
     x_in_ = f_.x_m;
     lb_ = f_.buffer_cells * scene.solver.dx;
     Vec3d at{};
@@ -80,11 +81,12 @@ class InflowBoundary {
     floor_ = ground_level(scene, at);
     for (int d = 0; d < D; ++d) g_[d] = scene.solver.gravity[d];
     g_up_ = std::fabs(scene.solver.gravity[D - 1]);
-    v0_ = std::pow(spacing, D);
     if constexpr (D == 3) {
       across_ = std::max(1L, std::lround((f_.y_hi - f_.y_lo) / s_));
       sy_ = (f_.y_hi - f_.y_lo) / across_;
     }
+    // The lattice's volume per slot: s along x and z, and across y the width over the lines (s^2 in 2D).
+    v0_ = D == 3 ? s_ * s_ * sy_ : s_ * s_;
     double h_max = 0;
     for (double h : f_.depth) h_max = std::max(h_max, h);
     layers_ = static_cast<long>(std::ceil(h_max / s_)) + 1;
@@ -150,7 +152,7 @@ class InflowBoundary {
       if (!buffer) {
         remove[i] = 1;
         ++removed;
-        absorbed_ += mp_;
+        absorbed_ += mass(i);
         continue;
       }
       const long k =
@@ -182,6 +184,7 @@ class InflowBoundary {
         }
         for (int q = 0; q < D * D; ++q) a_.C[q]->push_back(T(0));
         a_.e->push_back(T(0));
+        a_.vol->push_back(T(v0_));
         if (!a_.held->empty()) a_.held->push_back(T(0));
         a_.tag->push_back(T(1));
         const long k = static_cast<long>(L) / layers_;
@@ -241,20 +244,21 @@ class InflowBoundary {
     (*a_.e)[i] = T(hydrostatic_strain_at(h - (z - floor_), fluid_, g_up_));
     if (x >= x_in_) {  // it crossed: free water from now on
       (*a_.tag)[i] = T(0);
-      injected_ += mp_;
+      injected_ += mass(i);
     } else {
       (*a_.tag)[i] = T(1);
     }
   }
 
+  double mass(size_t i) const { return fluid_.density * double((*a_.vol)[i]); }
   double energy(size_t i) const {
     double v2 = 0, gx = 0;
     for (int d = 0; d < D; ++d) {
       v2 += double((*a_.v[d])[i]) * double((*a_.v[d])[i]);
       gx += g_[d] * double((*a_.x[d])[i]);
     }
-    return 0.5 * mp_ * v2 - mp_ * gx +
-           v0_ * mpm::tait_energy_density(double((*a_.e)[i]), fluid_.bulk_modulus, fluid_.gamma);
+    const double m = mass(i), V = (*a_.vol)[i];
+    return 0.5 * m * v2 - m * gx + V * mpm::tait_energy_density(double((*a_.e)[i]), fluid_.bulk_modulus, fluid_.gamma);
   }
 
   void compact(const std::vector<char>& remove) {
@@ -270,6 +274,7 @@ class InflowBoundary {
     }
     for (int q = 0; q < D * D; ++q) squeeze(*a_.C[q]);
     squeeze(*a_.e);
+    squeeze(*a_.vol);
     if (!a_.held->empty()) squeeze(*a_.held);
     squeeze(*a_.tag);
   }
@@ -277,7 +282,7 @@ class InflowBoundary {
   const InflowSettings& f_;
   FluidSettings fluid_;
   ParticleArrays<D, T> a_;
-  double s_, mp_, v0_ = 0, x_in_ = 0, lb_ = 0, floor_ = 0, g_up_ = 0, sy_ = 1;
+  double s_, v0_ = 0, x_in_ = 0, lb_ = 0, floor_ = 0, g_up_ = 0, sy_ = 1;
   double g_[D] = {};
   long across_ = 1, layers_ = 1, width_ = 1;  // lattice lines across y and up z; slots per line
   std::vector<double> phi_, carry_;           // per line k * layers_ + r: phase (m) and the error diffusion

@@ -168,7 +168,7 @@ class InstrumentSet {
       auto e = t == 0 ? s.energy() : s.last_energy();
       auto& r = record_.diagnostics;
       r["time"].push_back(t);
-      r["mass"].push_back(s.particle_mass() * s.n());
+      r["mass"].push_back(s.total_mass());
       r["kinetic"].push_back(e.kinetic);
       r["potential"].push_back(e.potential);
       r["elastic"].push_back(e.elastic);
@@ -192,12 +192,14 @@ class InstrumentSet {
   }
 
   // Free-surface elevation: the ground under the gauge plus the depth of water above it, the water's volume
-  // per unit area there. Each particle counts with the quadratic B-spline weight of its horizontal distance
-  // from the gauge (in cells), as a grid node would weigh it: over a regular lattice of spacing dx/k these
-  // weights add up to exactly k per cell of height, so water at rest reads its depth whatever the particles'
-  // offset from the gauge, and a moving free surface reads smoothly, not in one-particle steps. Volumes are
-  // at the reference density (mass / rho), which leaves out the compression rho g h / 2K (6e-4 of the depth at
-  // h = 0.23 m, K = 2e6 Pa). Spray above the surface counts as the water it is; an air pocket under it does not.
+  // per unit area there. Each particle's volume counts with the quadratic B-spline weight of its horizontal
+  // distance from the gauge (in cells), as a grid node would weigh it: over a regular lattice of spacing dx/k
+  // these weights add up to exactly k per cell of height, so water at rest reads its depth whatever the
+  // particles' offset from the gauge, and a moving free surface reads smoothly, not in one-particle steps (on a
+  // lattice stretched to fit a box, dx/k not whole, to within the weights' aliasing: 2.4e-6 of the depth for
+  // the Waseda basin's 196 columns in 3.91 m at dx = 0.04 m). Volumes are the particles' reference volumes
+  // (mass / rho), which leaves out the compression rho g h / 2K (6e-4 of the depth at h = 0.23 m, K = 2e6 Pa).
+  // Spray above the surface counts as the water it is; an air pocket under it does not.
   // (The gauge this replaces took the top of the particle column within dx/2 of the gauge, rising from the
   // ground without a gap: inside a broken bore a gap of one cell near the floor made single samples read the
   // bare floor, 0.2 m spikes in WG1 that a calibration's RMS misfit could not see past.)
@@ -212,10 +214,10 @@ class InstrumentSet {
       if (double(s.x(up, i)) < lowest) continue;
       double w = 1;
       for (int d = 0; d < up && w > 0; ++d) w *= bspline_weight((double(s.x(d, i)) - g.position[d]) * inv_dx);
-      weight += w;
+      if (w > 0) weight += w * double(s.volume(i));
     }
     const double area = up == 2 ? dx * dx : dx;
-    const double depth = open_[k] > 0 ? weight * s.particle_mass() / scene_.fluid.density / (area * open_[k]) : 0.0;
+    const double depth = open_[k] > 0 ? weight / (area * open_[k]) : 0.0;
     return ground_[k] + depth;
   }
 
@@ -243,7 +245,8 @@ class InstrumentSet {
   // a regular lattice of any spacing dx/k these weights add up to exactly k, so water at rest reads its depth
   // without the one-particle jumps of a +-dx/2 window (gauge_elevation weighs the same way). Across y a
   // particle falls in one bin (bins partition the width, so the flux summed over bins is the total). Depth is
-  // the water's volume per unit area at the reference density, mass / rho: the compression it leaves out is
+  // the water's volume per unit area at the reference density, mass / rho (the particles' reference volumes,
+  // which weigh the velocity too: the section's mass flux over its mass); the compression it leaves out is
   // rho g h / 2K (6e-4 at h = 0.23 m and K = 2e6 Pa). The velocity is also kept per layer dx thick: 0.1 m before
   // the quay wall the flow is sheared (measured at dx = 0.04 m: 0.11 m/s at the floor, 0.74 m/s at the top),
   // and a replay with the depth-averaged velocity alone carries too little momentum over the quay.
@@ -258,7 +261,7 @@ class InstrumentSet {
     for (size_t i = 0; i < s.n(); ++i) {
       const double q = std::fabs(double(s.x(0, i)) - r.x_m) * inv_dx;
       if (q >= 1.5) continue;
-      const double w = q < 0.5 ? 0.75 - q * q : 0.5 * (1.5 - q) * (1.5 - q);
+      const double w = (q < 0.5 ? 0.75 - q * q : 0.5 * (1.5 - q) * (1.5 - q)) * double(s.volume(i));
       size_t j = 0;
       if (D == 3) {
         const double b = std::floor((double(s.x(1, i)) - scene_.domain_lo[1]) * inv_dx);
@@ -271,11 +274,10 @@ class InstrumentSet {
       acc_zm_[l] += w;
       acc_zu_[l] += w * double(s.v(0, i));
     }
-    const double volume = s.particle_mass() / scene_.fluid.density;
     const double area = dx * (D == 3 ? r.bin_width_m : 1.0);
     r.time.push_back(t);
     for (size_t j = 0; j < nb; ++j) {
-      r.depth.push_back(acc_m_[j] * volume / area);
+      r.depth.push_back(acc_m_[j] / area);
       r.velocity.push_back(acc_m_[j] > 0 ? acc_u_[j] / acc_m_[j] : 0.0);
       for (size_t l = j * nz; l < (j + 1) * nz; ++l)
         r.profile.push_back(acc_zm_[l] > 0 ? acc_zu_[l] / acc_zm_[l] : r.velocity.back());

@@ -99,10 +99,10 @@ class MpmSolver final : public Simulation {
     }
     seed_particles();
     if (scene.inflow.present) {  // the buffer of the inflow boundary (solver/inflow.h)
-      inflow_ = std::make_unique<InflowBoundary<D, T>>(scene_, spacing_, mp_, particle_arrays());
+      inflow_ = std::make_unique<InflowBoundary<D, T>>(scene_, spacing_, particle_arrays());
       inflow_->seed();
       n_ = x_[0].size();
-      mass_ = mp_ * n_;
+      mass_ = water_mass(vol_, rho_);
     }
     setup_boundaries();
     sort_particles();
@@ -181,7 +181,7 @@ class MpmSolver final : public Simulation {
     return b;
   }
   size_t active_blocks() const override { return gkeys_.size(); }
-  size_t particle_bytes() const override { return n_ * sizeof(T) * (2 * D + D * D + 1); }
+  size_t particle_bytes() const override { return n_ * sizeof(T) * (2 * D + D * D + 2); }
 
   void momentum(double linear[3], double angular[3]) const override {
     double L[3] = {0, 0, 0}, A[3] = {0, 0, 0};
@@ -191,18 +191,19 @@ class MpmSolver final : public Simulation {
         x[d] = x_[d][i];
         v[d] = v_[d][i];
       }
-      for (int d = 0; d < 3; ++d) L[d] += mp_ * v[d];
+      const double mp = rho_ * double(vol_[i]);
+      for (int d = 0; d < 3; ++d) L[d] += mp * v[d];
       // Particle angular momentum: x_p x m v_p plus the APIC spin m sum_i w_ip (x_i - x_p) x v_i (Jiang et al.
       // 2015, section 5.3). With B_p = C_p D_p, D_p = dx^2/4 I for quadratic splines, the spin is
       // m dx^2/4 (C_ab - C_ba) over the cyclic (a, b) of each axis, C_ab = dv_a/dx_b: for a rigid rotation
       // C = [omega]x it is m dx^2/2 omega, turning the same way as the blob.
-      const double s = mp_ * dx_ * dx_ / 4.0;
+      const double s = mp * dx_ * dx_ / 4.0;
       if constexpr (D == 3) {
-        A[0] += mp_ * (x[1] * v[2] - x[2] * v[1]) + s * (C_[7][i] - C_[5][i]);
-        A[1] += mp_ * (x[2] * v[0] - x[0] * v[2]) + s * (C_[2][i] - C_[6][i]);
-        A[2] += mp_ * (x[0] * v[1] - x[1] * v[0]) + s * (C_[3][i] - C_[1][i]);
+        A[0] += mp * (x[1] * v[2] - x[2] * v[1]) + s * (C_[7][i] - C_[5][i]);
+        A[1] += mp * (x[2] * v[0] - x[0] * v[2]) + s * (C_[2][i] - C_[6][i]);
+        A[2] += mp * (x[0] * v[1] - x[1] * v[0]) + s * (C_[3][i] - C_[1][i]);
       } else {
-        A[2] += mp_ * (x[0] * v[1] - x[1] * v[0]) + s * (C_[2][i] - C_[1][i]);
+        A[2] += mp * (x[0] * v[1] - x[1] * v[0]) + s * (C_[2][i] - C_[1][i]);
       }
     }
     for (int d = 0; d < 3; ++d) {
@@ -248,7 +249,7 @@ class MpmSolver final : public Simulation {
   size_t n() const { return n_; }
   T x(int d, size_t i) const { return x_[d][i]; }
   T v(int d, size_t i) const { return v_[d][i]; }
-  double particle_mass() const { return mp_; }
+  T volume(size_t i) const { return vol_[i]; }  // reference volume: the particle's mass over rho
   double max_speed() const { return max_speed_; }
 
   struct Energy {
@@ -265,9 +266,10 @@ class MpmSolver final : public Simulation {
         v2 += double(v_[d][i]) * v_[d][i];
         gx += double(gravity_[d]) * x_[d][i];
       }
-      ke += 0.5 * mp_ * v2;
-      pe -= mp_ * gx;
-      el += v0_ * mpm::tait_energy_density(double(e_[i]), double(K_), double(gamma_));
+      const double V = vol_[i], mp = rho_ * V;
+      ke += 0.5 * mp * v2;
+      pe -= mp * gx;
+      el += V * mpm::tait_energy_density(double(e_[i]), double(K_), double(gamma_));
     }
     return {ke, pe, el, debris_ ? debris_->energy() : 0.0};
   }
@@ -276,8 +278,7 @@ class MpmSolver final : public Simulation {
   void seed_particles() {
     const int per_axis = static_cast<int>(std::lround(std::pow(scene_.solver.ppc, 1.0 / D)));
     spacing_ = dx_ / per_axis;
-    v0_ = std::pow(spacing_, D);
-    mp_ = scene_.fluid.density * v0_;
+    rho_ = scene_.fluid.density;
     // Water is not seeded inside a debris box: the box displaces it.
     std::function<bool(const double*)> displaced;
     if (debris_)
@@ -294,8 +295,9 @@ class MpmSolver final : public Simulation {
     }
     for (int k = 0; k < D * D; ++k) C_[k].assign(n_, T(0));
     e_.assign(seeds.strain.begin(), seeds.strain.end());
+    vol_.assign(seeds.volume.begin(), seeds.volume.end());
     if (seeds.any_held) held_.assign(seeds.held.begin(), seeds.held.end());
-    mass_ = mp_ * n_;
+    mass_ = water_mass(vol_, rho_);
   }
 
   void setup_boundaries() {
@@ -353,6 +355,7 @@ class MpmSolver final : public Simulation {
       }
       for (int k = 0; k < D * D; ++k) permute(C_[k]);
       permute(e_);
+      permute(vol_);
       if (!held_.empty()) permute(held_);
       if (!tag_.empty()) permute(tag_);
       std::vector<uint64_t>& sorted = sort_key_scratch_;
@@ -483,9 +486,9 @@ class MpmSolver final : public Simulation {
   // into its private tile, node-major with kLanes channels per node.
   void p2g(T dt) {
     const T dx = T(dx_);
-    const T m = T(mp_);
-    const T stress_scale = -dt * T(v0_) * T(4) * inv_dx_ * inv_dx_;
-    const T lift = T(double(dt) * mp_ * scene_.basin.forcing.hold(time_) * std::fabs(scene_.solver.gravity[D - 1]));
+    const T rho = T(rho_);
+    const T stress_scale = -dt * T(4) * inv_dx_ * inv_dx_;  // times the particle's reference volume
+    const T lift = T(double(dt) * scene_.basin.forcing.hold(time_) * std::fabs(scene_.solver.gravity[D - 1]));
     const long nblocks = static_cast<long>(pkeys_.size());
     Lane unit[kLanes];
     for (int c = 0; c < kLanes; ++c) unit[c] = Eigen::Matrix<T, kLanes, 1>::Unit(c).array();
@@ -507,9 +510,9 @@ class MpmSolver final : public Simulation {
         }
         T Cp[D * D], sigma[D * D], A[D * D];
         for (int k = 0; k < D * D; ++k) Cp[k] = C_[k][i];
-        const T e = e_[i];
+        const T e = e_[i], V = vol_[i], m = rho * V;
         mpm::fluid_stress<D>(e, Cp, K_, gamma_, mu_, sigma);
-        for (int k = 0; k < D * D; ++k) A[k] = stress_scale * (T(1) + e) * sigma[k] + m * Cp[k];
+        for (int k = 0; k < D * D; ++k) A[k] = stress_scale * V * (T(1) + e) * sigma[k] + m * Cp[k];
         // What node (base + i) receives, before its weight: the channels at i = 0 plus i_b times slope[b].
         // Momentum m v + A (x_node - x_p) = m v - A f dx + A i dx. The lane vectors are summed from the unit
         // vectors rather than written lane by lane: a vector load right after scalar stores to the same place
@@ -521,11 +524,11 @@ class MpmSolver final : public Simulation {
           mom0[a] = s;
         }
         // The vacuum's hold: an upward force f(t) m |g| on the held water.
-        if (!held_.empty()) mom0[D - 1] += held_[i] * lift;
+        if (!held_.empty()) mom0[D - 1] += held_[i] * lift * m;
         T xp[D];
         for (int d = 0; d < D; ++d) xp[d] = x_[d][i];
         const T mJ = m * (e - mpm::hydrostatic_strain<D>(xp, strain_slope_));
-        const T vol = T(v0_) * (T(1) + e);  // the particle's current volume, for the fill of its nodes
+        const T vol = V * (T(1) + e);  // the particle's current volume, for the fill of its nodes
         Lane at0 = m * unit[0] + mJ * unit[1 + D] + vol * unit[2 + D], slope[D];
         for (int a = 0; a < D; ++a) at0 += mom0[a] * unit[1 + a];
         for (int b = 0; b < D; ++b) {
@@ -734,7 +737,8 @@ class MpmSolver final : public Simulation {
       double J[3];
       for (int d = 0; d < 3; ++d) {
         v_[d][i] = T(double(v_[d][i]) - rel * n[d]);
-        J[d] = mp_ * rel * n[d];  // the box's share: the water's lost momentum (rel < 0: into the box)
+        // the box's share: the water's lost momentum (rel < 0: into the box)
+        J[d] = rho_ * double(vol_[i]) * rel * n[d];
       }
       double* a = acc + b * 6;
       for (int d = 0; d < 3; ++d) a[d] += J[d];
@@ -855,8 +859,9 @@ class MpmSolver final : public Simulation {
         if (have_grid) {
           const T corrected = mpm::fill_correction(e, Fg / wsum, fill_rate, fill_tolerance_);
           if (corrected != e)  // the energy the constraint supplies (what it removes is dissipation)
-            fill_work += std::max(0.0, v0_ * (mpm::tait_energy_density(double(corrected), double(K_), double(gamma_)) -
-                                              mpm::tait_energy_density(double(e), double(K_), double(gamma_))));
+            fill_work += std::max(0.0, double(vol_[i]) *
+                                           (mpm::tait_energy_density(double(corrected), double(K_), double(gamma_)) -
+                                            mpm::tait_energy_density(double(e), double(K_), double(gamma_))));
           e = corrected;
         }
         e_[i] = e;
@@ -888,9 +893,10 @@ class MpmSolver final : public Simulation {
           continue;
         }
         vmax2 = std::max(vmax2, v2);
-        ke += 0.5 * mp_ * v2;
-        pe -= mp_ * gx;
-        el += v0_ * double(mpm::tait_energy_density(e, K_, gamma_));  // in T: the audit needs no more
+        const double V = vol_[i], mp = rho_ * V;
+        ke += 0.5 * mp * v2;
+        pe -= mp * gx;
+        el += V * double(mpm::tait_energy_density(e, K_, gamma_));  // in T: the audit needs no more
       }
     }
     if (debris_)  // the particles' lost momentum goes to the boxes, summed in block order (thread-independent)
@@ -955,6 +961,7 @@ class MpmSolver final : public Simulation {
     }
     for (int k = 0; k < D * D; ++k) a.C[k] = &C_[k];
     a.e = &e_;
+    a.vol = &vol_;
     a.held = &held_;
     a.tag = &tag_;
     return a;
@@ -964,7 +971,7 @@ class MpmSolver final : public Simulation {
     const auto change = inflow_->apply(t0, t1);
     energy0_ += change.energy;
     n_ = x_[0].size();
-    mass_ = mp_ * n_;
+    if (change.structural) mass_ = water_mass(vol_, rho_);
     needs_sort_ = needs_sort_ || change.structural;
   }
 
@@ -988,10 +995,11 @@ class MpmSolver final : public Simulation {
   T fill_tolerance_ = 0;  // mpm::fill_correction
   T strain_slope_[D] = {};  // s of mpm::hydrostatic_strain
   double c_ = 0;
-  double spacing_ = 0, v0_ = 0, mp_ = 0, mass_ = 0;
+  double spacing_ = 0, rho_ = 0, mass_ = 0;  // mass_: rho times the particles' volumes summed in double
   size_t n_ = 0;
   std::vector<T> held_;  // 1 for water the reservoir's vacuum holds (empty when nothing is held)
   std::vector<T> x_[D], v_[D], C_[D * D], e_;  // e: volumetric strain J - 1
+  std::vector<T> vol_;  // reference volume (solver/seeding.h): the particle's mass is rho vol
   std::vector<uint64_t> pkeys_, gkeys_;
   std::vector<uint32_t> pstart_;
   std::vector<int32_t> p_nbr_, g_nbr_;

@@ -2,6 +2,11 @@
 // ppc^(1/D) particles per cell per axis in each water box, hydrostatically preloaded where the box asks, and
 // flagged where the reservoir's vacuum holds the water. Host code, header-only so that the CUDA library needs
 // nothing from the solver library.
+//
+// A box that is not a whole number of spacings long on an axis gets lround(L / spacing) particles there,
+// stretched to fit, so each particle carries the box's volume over its particles, prod (hi - lo) / count, not
+// spacing^D: every box then holds rho times its volume (at dx = 0.04 m the Waseda basin's 0.23 m, 11.5
+// spacings seeded as 12, held 4.6 % too much water with spacing^D).
 #pragma once
 #include <cmath>
 #include <cstdint>
@@ -16,6 +21,7 @@ struct Seeds {
   std::vector<double> x[3];    // positions, D axes used
   std::vector<double> strain;  // e = J - 1
   std::vector<uint8_t> held;   // 1 for water the reservoir's vacuum holds (issue 3)
+  std::vector<double> volume;  // reference volume (m^3, m^2 in 2D): mass rho volume
   bool any_held = false;
   std::size_t size() const { return strain.size(); }
 };
@@ -31,7 +37,11 @@ Seeds seed_water(const Scene& scene, double spacing, const std::function<bool(co
     long count[D];
     for (int d = 0; d < D; ++d) count[d] = std::max(1L, std::lround((box.hi[d] - box.lo[d]) / spacing));
     long total = 1;
-    for (int d = 0; d < D; ++d) total *= count[d];
+    double volume = 1;  // the box's volume per lattice site
+    for (int d = 0; d < D; ++d) {
+      total *= count[d];
+      volume *= (box.hi[d] - box.lo[d]) / count[d];
+    }
     for (long k = 0; k < total; ++k) {
       long r = k;
       double p[D];
@@ -62,10 +72,20 @@ Seeds seed_water(const Scene& scene, double spacing, const std::function<bool(co
       // The reservoir's water above still-water level is what the vacuum holds.
       const bool held = forced && p[0] < B.reservoir_length_m && p[D - 1] > B.still_water_m;
       s.held.push_back(held ? 1 : 0);
+      s.volume.push_back(volume);
       s.any_held |= held;
     }
   }
   return s;
+}
+
+// The mass of particles with these reference volumes, as a backend stores them (in its precision): rho times
+// their sum in double. Both backends total their water with it, in seeding order, so they agree exactly.
+template <typename Volumes>
+double water_mass(const Volumes& volume, double rho) {
+  double sum = 0;
+  for (const auto& v : volume) sum += double(v);
+  return rho * sum;
 }
 
 }  // namespace flume

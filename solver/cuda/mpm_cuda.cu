@@ -14,9 +14,10 @@
 // Instruments. The CPU's InstrumentSet is reused unchanged. Its gauges and probes read particle positions
 // and velocities, which are copied to host mirrors lazily, only when one of them samples (2 D arrays of n
 // values: 24 MB for a million particles in 3D float, about 1-2 ms over PCIe, plus the InstrumentSet's O(n)
-// host loop per gauge or probe). Diagnostics use the energies reduced on the device during G2P: no copy. Load
-// cells sum the wall impulse on the device (atomics into D doubles per wall), copied back each step (a few
-// bytes) only when the scene has load cells.
+// host loop per gauge or probe); the gauges and sections also read the particles' reference volumes, copied
+// only after a sort has moved them. Diagnostics use the energies reduced on the device during G2P: no copy.
+// Load cells sum the wall impulse on the device (atomics into D doubles per wall), copied back each step (a
+// few bytes) only when the scene has load cells.
 //
 // The code uses Thrust only (device_vector, sort, unique, lower_bound, for_each, transform_reduce) with
 // functor structs, so that the same file also compiles with the host compiler against Thrust's sequential
@@ -115,6 +116,7 @@ struct View {
   T* v[D];
   T* C[D * D];
   T* e;
+  const T* vol;   // reference volume (solver/seeding.h): the particle's mass is rho vol
   const T* held;  // 1 for water the reservoir's vacuum holds; null when nothing is held
   double* fill_work;  // per particle: the elastic energy the volume constraint added this step (J)
   const int32_t* pblk;  // index of the particle's (sorted) block in pkeys
@@ -126,7 +128,8 @@ struct View {
   uint8_t* gwall;
   size_t nodes;
   // constants
-  T dx, inv_dx, mp, v0, K, gamma, mu, psi, fill_tol, inv_cell_volume;
+  T dx, inv_dx, rho, K, gamma, mu, psi, fill_tol, inv_cell_volume;
+  double rho_d;
   T grid_lo[D], gravity[D], strain_slope[D];
   double dx_d, grid_lo_d[D], domain_lo[D], domain_hi[D];
   const Wall<D, T>* walls;
@@ -186,10 +189,10 @@ template <int D, typename T>
 struct P2G {
   View<D, T> s;
   T dt;
-  T lift;  // the vacuum's hold on a held particle this step: dt f(t) m |g| (upward momentum)
+  T lift;  // the vacuum's hold on a held particle this step, per unit mass: dt f(t) |g| (upward velocity)
   FLUME_HD void operator()(size_t i) const {
-    const T dx = s.dx, m = s.mp;
-    const T stress_scale = -dt * s.v0 * T(4) * s.inv_dx * s.inv_dx;
+    const T dx = s.dx, V = s.vol[i], m = s.rho * V;
+    const T stress_scale = -dt * T(4) * s.inv_dx * s.inv_dx;  // times the particle's reference volume
     const int32_t pb = s.pblk[i];
     int blk[D], base[D];
     unpack_key<D>(s.pkeys[pb], blk);
@@ -203,7 +206,7 @@ struct P2G {
     for (int k = 0; k < D * D; ++k) Cp[k] = s.C[k][i];
     const T e = s.e[i];
     mpm::fluid_stress<D>(e, Cp, s.K, s.gamma, s.mu, sigma);
-    for (int k = 0; k < D * D; ++k) A[k] = stress_scale * (T(1) + e) * sigma[k] + m * Cp[k];
+    for (int k = 0; k < D * D; ++k) A[k] = stress_scale * V * (T(1) + e) * sigma[k] + m * Cp[k];
     // Momentum carried to node (base + off): m v + A (off - f) dx, split into a constant and a linear part.
     T mom0[D], xp[D];
     for (int a = 0; a < D; ++a) {
@@ -212,9 +215,9 @@ struct P2G {
       mom0[a] = sum;
       xp[a] = s.x[a][i];
     }
-    if (s.held) mom0[D - 1] += s.held[i] * lift;
+    if (s.held) mom0[D - 1] += s.held[i] * lift * m;
     const T mJ = m * (e - mpm::hydrostatic_strain<D>(xp, s.strain_slope));
-    const T vol = s.v0 * (T(1) + e);
+    const T vol = V * (T(1) + e);
     constexpr int kStencil = mpm::Pow<D>::of(3);
     for (int q = 0; q < kStencil; ++q) {
       int off[D], node[D];
@@ -344,8 +347,8 @@ struct G2P {
     if (have_grid) {
       const T corrected = mpm::fill_correction(e, Fg / wsum, fill_rate, s.fill_tol);
       if (corrected != e) {  // what the constraint supplies (what it removes is dissipation): MpmSolver::g2p
-        work = double(s.v0) * (mpm::tait_energy_density(double(corrected), double(s.K), double(s.gamma)) -
-                               mpm::tait_energy_density(double(e), double(s.K), double(s.gamma)));
+        work = double(s.vol[i]) * (mpm::tait_energy_density(double(corrected), double(s.K), double(s.gamma)) -
+                                   mpm::tait_energy_density(double(e), double(s.K), double(s.gamma)));
         work = work > 0.0 ? work : 0.0;
       }
       e = corrected;
@@ -413,9 +416,10 @@ struct AuditParticle {
       return r;
     }
     r.vmax2 = v2;
-    r.ke = 0.5 * double(s.mp) * v2;
-    r.pe = -double(s.mp) * gx;
-    r.el = double(s.v0) * mpm::tait_energy_density(double(e), double(s.K), double(s.gamma));
+    const double V = s.vol[i], mp = s.rho_d * V;
+    r.ke = 0.5 * mp * v2;
+    r.pe = -mp * gx;
+    r.el = V * mpm::tait_energy_density(double(e), double(s.K), double(s.gamma));
     return r;
   }
 };
@@ -488,7 +492,7 @@ class MpmCuda final : public Simulation {
     if (has_loads_) thr::fill(thr::device, impulse_.begin(), impulse_.end(), 0.0);
     thr::counting_iterator<size_t> first(0);
     // The vacuum's hold: an upward force f(t) m |g| on the held water (as MpmSolver::p2g).
-    const T lift = T(double(dt) * mp_ * scene_.basin.forcing.hold(time_) * std::fabs(scene_.solver.gravity[D - 1]));
+    const T lift = T(double(dt) * scene_.basin.forcing.hold(time_) * std::fabs(scene_.solver.gravity[D - 1]));
     thr::for_each(thr::device, first, first + n_, P2G<D, T>{s, T(dt), lift});
     thr::for_each(thr::device, first, first + s.nodes, GridUpdate<D, T>{s, T(dt)});
     if (has_loads_) thr::copy(impulse_.begin(), impulse_.end(), load_impulse_.begin());
@@ -539,31 +543,32 @@ class MpmCuda final : public Simulation {
            (gkeys_.capacity() + pkeys_.capacity()) * sizeof(uint64_t) + p_nbr_.capacity() * sizeof(int32_t);
   }
   size_t active_blocks() const override { return gkeys_.size(); }
-  size_t particle_bytes() const override { return n_ * (sizeof(T) * (2 * D + D * D + 1) + sizeof(int32_t)); }
+  size_t particle_bytes() const override { return n_ * (sizeof(T) * (2 * D + D * D + 2) + sizeof(int32_t)); }
 
   void momentum(double linear[3], double angular[3]) const override {
     sync_host();
+    if (!host_vol_fresh_) sync_volume();
     std::vector<T> C[D * D];
     for (int k = 0; k < D * D; ++k) {
       C[k].resize(n_);
       thr::copy(C_[k].begin(), C_[k].end(), C[k].begin());
     }
     double L[3] = {0, 0, 0}, A[3] = {0, 0, 0};
-    const double s =
-        mp_ * dx_ * dx_ / 4.0;  // APIC spin term, as MpmSolver::momentum (Jiang et al. 2015, eq. 26)
     for (size_t i = 0; i < n_; ++i) {
       double x[3] = {0, 0, 0}, v[3] = {0, 0, 0};
       for (int d = 0; d < D; ++d) {
         x[d] = hx_[d][i];
         v[d] = hv_[d][i];
       }
-      for (int d = 0; d < 3; ++d) L[d] += mp_ * v[d];
+      const double mp = rho_ * double(hvol_[i]);
+      const double s = mp * dx_ * dx_ / 4.0;  // APIC spin, as MpmSolver::momentum (Jiang et al. 2015, eq. 26)
+      for (int d = 0; d < 3; ++d) L[d] += mp * v[d];
       if constexpr (D == 3) {
-        A[0] += mp_ * (x[1] * v[2] - x[2] * v[1]) + s * (C[5][i] - C[7][i]);
-        A[1] += mp_ * (x[2] * v[0] - x[0] * v[2]) + s * (C[6][i] - C[2][i]);
-        A[2] += mp_ * (x[0] * v[1] - x[1] * v[0]) + s * (C[1][i] - C[3][i]);
+        A[0] += mp * (x[1] * v[2] - x[2] * v[1]) + s * (C[5][i] - C[7][i]);
+        A[1] += mp * (x[2] * v[0] - x[0] * v[2]) + s * (C[6][i] - C[2][i]);
+        A[2] += mp * (x[0] * v[1] - x[1] * v[0]) + s * (C[1][i] - C[3][i]);
       } else {
-        A[2] += mp_ * (x[0] * v[1] - x[1] * v[0]) + s * (C[1][i] - C[2][i]);
+        A[2] += mp * (x[0] * v[1] - x[1] * v[0]) + s * (C[1][i] - C[2][i]);
       }
     }
     for (int d = 0; d < 3; ++d) {
@@ -615,7 +620,10 @@ class MpmCuda final : public Simulation {
     if (!host_fresh_) sync_host();
     return hv_[d][i];
   }
-  double particle_mass() const { return mp_; }
+  T volume(size_t i) const {  // reference volume: the particle's mass over rho
+    if (!host_vol_fresh_) sync_volume();
+    return hvol_[i];
+  }
   double max_speed() const { return max_speed_; }
 
   struct Energy {
@@ -635,8 +643,7 @@ class MpmCuda final : public Simulation {
   void seed_particles() {
     const int per_axis = static_cast<int>(std::lround(std::pow(scene_.solver.ppc, 1.0 / D)));
     spacing_ = dx_ / per_axis;
-    v0_ = std::pow(spacing_, D);
-    mp_ = scene_.fluid.density * v0_;
+    rho_ = scene_.fluid.density;
     const Seeds seeds = seed_water<D>(scene_, spacing_);
     n_ = seeds.size();
     for (int d = 0; d < D; ++d) {
@@ -647,12 +654,15 @@ class MpmCuda final : public Simulation {
     for (int k = 0; k < D * D; ++k) C_[k].assign(n_, T(0));
     const std::vector<T> strain(seeds.strain.begin(), seeds.strain.end());
     e_.assign(strain.begin(), strain.end());
+    const std::vector<T> vols(seeds.volume.begin(), seeds.volume.end());
+    vol_.assign(vols.begin(), vols.end());
+    host_vol_fresh_ = false;
     if (seeds.any_held) {
       const std::vector<T> held(seeds.held.begin(), seeds.held.end());
       held_.assign(held.begin(), held.end());
     }
     fill_work_.assign(e_.size(), 0.0);
-    mass_ = mp_ * n_;
+    mass_ = water_mass(vols, rho_);
     pblk_.resize(n_);
     keys_.resize(n_);
     order_.resize(n_);
@@ -696,6 +706,7 @@ class MpmCuda final : public Simulation {
     }
     for (int k = 0; k < D * D; ++k) s.C[k] = raw(C_[k]);
     s.e = raw(e_);
+    s.vol = raw(vol_);
     s.held = held_.empty() ? nullptr : raw(held_);
     s.fill_work = raw(fill_work_);
     s.pblk = raw(pblk_);
@@ -707,8 +718,8 @@ class MpmCuda final : public Simulation {
     s.nodes = gkeys_.size() * kNodes;
     s.dx = T(dx_);
     s.inv_dx = inv_dx_;
-    s.mp = T(mp_);
-    s.v0 = T(v0_);
+    s.rho = T(rho_);
+    s.rho_d = rho_;
     s.K = K_;
     s.gamma = gamma_;
     s.mu = mu_;
@@ -740,6 +751,8 @@ class MpmCuda final : public Simulation {
     }
     for (int k = 0; k < D * D; ++k) permute(C_[k]);
     permute(e_);
+    permute(vol_);
+    host_vol_fresh_ = false;
     if (!held_.empty()) permute(held_);
     // Particle blocks, and each particle's block index.
     pkeys_.resize(n_);
@@ -830,6 +843,12 @@ class MpmCuda final : public Simulation {
     }
     host_fresh_ = true;
   }
+  // The reference volumes change only when the particles are sorted: copied to the host only then.
+  void sync_volume() const {
+    hvol_.resize(n_);
+    thr::copy(vol_.begin(), vol_.end(), hvol_.begin());
+    host_vol_fresh_ = true;
+  }
 
   Scene scene_;
   InstrumentSet<MpmCuda> instruments_;
@@ -840,10 +859,10 @@ class MpmCuda final : public Simulation {
   T K_ = 0, gamma_ = 0, mu_ = 0, psi_ = 0;
   T strain_slope_[D] = {};
   double c_ = 0;
-  double spacing_ = 0, v0_ = 0, mp_ = 0, mass_ = 0;
+  double spacing_ = 0, rho_ = 0, mass_ = 0;  // mass_: rho times the particles' volumes summed in double
   size_t n_ = 0;
   // device: particles (e: volumetric strain J - 1), sort scratch, blocks, grid, walls
-  thr::device_vector<T> x_[D], v_[D], C_[D * D], e_, held_, tmp_;
+  thr::device_vector<T> x_[D], v_[D], C_[D * D], e_, vol_, held_, tmp_;
   thr::device_vector<int32_t> pblk_, p_nbr_;
   thr::device_vector<uint32_t> order_;
   thr::device_vector<uint64_t> keys_, pkeys_, gkeys_, nbr_keys_;
@@ -857,8 +876,8 @@ class MpmCuda final : public Simulation {
   T domain_mu_ = 0;
   bool has_loads_ = false;
   // host
-  mutable std::vector<T> hx_[D], hv_[D];
-  mutable bool host_fresh_ = false;
+  mutable std::vector<T> hx_[D], hv_[D], hvol_;
+  mutable bool host_fresh_ = false, host_vol_fresh_ = false;
   std::vector<double> load_impulse_;
   bool needs_sort_ = true;
   double time_ = 0, dt_ = 0, max_speed_ = 0;

@@ -94,6 +94,43 @@ TEST(Conservation, MassIsExactThroughADamBreak) {
   EXPECT_GT(sim->record().diagnostics.at("max_speed").back(), 0.5);
 }
 
+// A water box whose sides are not whole particle spacings (dx 0.04 m, spacing 0.02 m: 6.5 x 5 x 11.5 spacings,
+// seeded as 7 x 5 x 12 particles stretched to fit) carries rho times its volume: each particle's reference
+// volume is the box's volume over its particles, so the total does not depend on the rounding of L / spacing
+// (with rho spacing^D per particle it carried 7 x 12 / (6.5 x 11.5) = 12 % too much in 2D). In double the
+// total is exact to the round-off of summing n volumes; in float each volume is rounded once to 6e-8.
+TEST(Conservation, SeededMassIsRhoTimesTheBoxVolume) {
+  for (int dim : {2, 3})
+    for (const char* precision : {"double", "float"}) {
+      SCOPED_TRACE(std::to_string(dim) + "D " + precision);
+      const bool d2 = dim == 2;
+      const std::string text = R"({"name": "odd_box", "dimension": )" + std::to_string(dim) + R"(,
+        "domain": {"lo": )" + (d2 ? "[-0.5, -0.5]" : "[-0.5, -0.5, -0.5]") +
+                               R"(, "hi": )" + (d2 ? "[0.5, 0.5]" : "[0.5, 0.5, 0.5]") + R"(},
+        "solver": {"dx": 0.04, "ppc": )" + (d2 ? "4" : "8") +
+                               R"(, "cfl": 0.4, "precision": ")" + precision + R"(", "end_time": 0.006},
+        "fluid": {"density": 1000, "bulk_modulus": 2.0e6, "gamma": 7.0, "viscosity": 1.0e-3, "jbar_psi": 0.5},
+        "boundaries": [{"name": "floor", "type": "half_space", "point": )" +
+                               (d2 ? "[0.0, -0.2]" : "[0.0, 0.0, -0.2]") + R"(, "normal": )" +
+                               (d2 ? "[0.0, 1.0]" : "[0.0, 0.0, 1.0]") + R"(, "condition": "slip"}],
+        "water": [{"lo": )" + (d2 ? "[-0.1, -0.2]" : "[-0.1, -0.05, -0.2]") +
+                               R"(, "hi": )" + (d2 ? "[0.03, 0.03]" : "[0.03, 0.05, 0.03]") + R"(}],
+        "instruments": {"diagnostics_rate_hz": 1000}
+      })";
+      const Scene scene = parse_scene_text(text, "odd_box.json");
+      auto sim = make_simulation(scene, {});
+      const double volume = d2 ? 0.13 * 0.23 : 0.13 * 0.1 * 0.23;
+      const double m0 = sim->total_mass(), tol = (precision[0] == 'd' ? 1e-12 : 1e-7) * kRho * volume;
+      EXPECT_EQ(sim->particle_count(), d2 ? 7u * 12u : 7u * 5u * 12u);
+      EXPECT_NEAR(m0, kRho * volume, tol);
+      ASSERT_EQ(test::run_until(*sim, scene.solver.end_time), RunStatus::kOk) << sim->message();
+      EXPECT_EQ(sim->total_mass(), m0);
+      const auto& mass = sim->record().diagnostics.at("mass");
+      ASSERT_GT(mass.size(), 5u);
+      for (double m : mass) EXPECT_EQ(m, m0);
+    }
+}
+
 // Linear momentum with a translating, spinning blob: constant to round-off.
 TEST(Conservation, LinearMomentumToRoundOff) {
   for (int dim : {2, 3}) {

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "solver/instruments.h"
 #include "solver/scene.h"
 #include "solver/simulation.h"
 #include "test_util.h"
@@ -83,6 +84,49 @@ TEST(Waseda, DISABLED_HeldReservoirStaysPut) {
   std::printf("RMS speed %.2e m/s (limit %.2e); max %.2e m/s at (%.3f, %.3f)\n", o.rms_speed, limit, o.max_speed,
               o.where[0], o.where[1]);
   EXPECT_LT(o.rms_speed, limit);
+}
+
+// The seeding (solver/seeding.h) at dx = 0.04 m: the basin's 0.23 m of still water is 11.5 particle spacings
+// (0.02 m) and its 3.91 m 195.5, seeded as 12 x 196 particles stretched to fit. The particles carry the box's
+// volume between them, so every gauge over the basin reads the still-water level at t = 0 (with rho spacing^2
+// each they held 4.6 % too much water and read +10.6 mm).
+// Tolerance, from the gauge's method (gauge_elevation): it reads the volume sum_i w_i V_i / dx of the water
+// over its footprint, w_i the B-spline weight of particle i's distance from the gauge. The seeded columns, sx
+// apart, each hold the depth H (their particles' volumes sum to sx H), so the gauge reads
+// H (sx / dx) sum_j B((x_j - x_g) / dx): H exactly when dx / sx is whole, else off by the lattice sum's
+// deviation from dx / sx, at most its largest over the lattice's phase (computed below). Round-off adds the
+// float positions, within delta = 2.4e-7 m of the lattice (half an ulp at 4 m < x < 8 m), which move the
+// weights' sum by at most delta / dx times B's total variation 1.5 (|B'| summed over columns sx apart, times
+// sx / dx), bounded by 2 H delta / dx; and the float volumes, 6e-8 relative.
+TEST(Waseda, BasinGaugesReadStillWaterAtStart) {
+  const Scene scene = load_scene(kScene, {{"solver.dx", "0.04"}, {"solver.end_time", "0.01"}});
+  auto sim = make_simulation(scene, {});
+  const double dx = scene.solver.dx, s = dx / 2, H = scene.basin.still_water_m;
+  int checked = 0;
+  for (const auto& g : scene.instruments.gauges) {
+    const double xg = g.position[0];
+    // The basin's water box under the gauge's whole footprint (the gauges over the dry apron have none).
+    const WaterRegion* box = nullptr;
+    for (const auto& w : scene.water)
+      if (w.lo[0] <= xg - 1.5 * dx && xg + 1.5 * dx <= w.hi[0] && std::fabs(w.hi[1] - H) < 1e-12) box = &w;
+    if (!box) continue;
+    const double sx = (box->hi[0] - box->lo[0]) / std::max(1L, std::lround((box->hi[0] - box->lo[0]) / s));
+    double alias = 0;
+    for (int k = 0; k < 1000; ++k) {
+      double sum = 0;
+      for (long j = -long(2 * dx / sx) - 1; j <= long(2 * dx / sx) + 1; ++j)
+        sum += bspline_weight(((k + 0.5) / 1000 + j) * sx / dx);
+      alias = std::max(alias, std::fabs(sum * sx / dx - 1));
+    }
+    const double delta = std::ldexp(1.0, -22);  // half an ulp of a float in [4, 8)
+    const double tol = H * (alias + 2 * delta / dx + 6e-8);
+    const double eta = sim->record().gauges.at(g.name).at(0);
+    std::printf("%s: eta(0) = %+.3e m (tolerance %.2e m: lattice %.2e, round-off %.2e; sx = %.6f m)\n",
+                g.name.c_str(), eta, tol, H * alias, tol - H * alias, sx);
+    EXPECT_NEAR(eta, 0.0, tol) << g.name;
+    ++checked;
+  }
+  EXPECT_EQ(checked, 2);  // WG1 and WG2
 }
 
 // Item 3: arrivals in gauge order, mass exact. Item 2: WG1's peak against t99 and gate height.
