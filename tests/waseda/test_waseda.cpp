@@ -66,8 +66,10 @@ Outcome run(std::vector<Override> sets, double end_time) {
 // Known failure, kept visible (issue 3 stays open on it): at dx = 0.04 m with the scene's J-bar psi = 0.9 the
 // basin's level sank 6 mm in 2 s; with the volume constraint (mpm::fill_correction) the gauges stay within
 // -3.9 / +1.7 mm (the old particle-column gauge), still above the 1 mm allowed, and the RMS speed is 1.5e-2 m/s
-// against the 6.5e-3 allowed. The volume gauge reads WG1 and WG2 falling by 5.0 and 5.5 mm, and the fastest water
-// (7.6e-2 m/s) sits at the foot of the quay wall: the wall convection of docs/validation.md, section 1. (Plain
+// against the 6.5e-3 allowed. The volume gauge read WG1 and WG2 falling by 5.0 and 5.5 mm; with the particles
+// carrying their box's volume (solver/seeding.h: the basin held 4.6 % too much water before) 3.5 and 5.2 mm,
+// RMS speed 1.7e-2 m/s, and the fastest water (7.3e-2 m/s) sits at the foot of the quay wall, where the water
+// piles up: the wall convection of docs/validation.md, section 1. (Plain
 // MLS-MPM, psi = 0, sinks 2-3 mm, but it locks in the 2.5-cell gate opening: WG1's peak falls from 0.158 m to
 // 0.025 m, so the scenes keep J-bar.)
 // Item 1: with f = 1 for 2 s nothing moves: every gauge within 1 mm of where it started, and the water still:
