@@ -450,6 +450,11 @@ class MpmSolver final : public Simulation {
     }
   }
 
+  struct Ghost {
+    size_t idx = 0;       // the ghost node
+    int offset[D] = {};   // the reflection's offset in nodes, then (after the walls) the mirror node
+    unsigned axes = 0;    // the normal axes: kept; the others are exchanged with the mirror
+  };
   struct Wall {
     bool box = true;
     T a[D], b[D];  // box: lo, hi; half-space: point, normal
@@ -566,10 +571,13 @@ class MpmSolver final : public Simulation {
     const int nthreads = omp_get_max_threads();
     std::vector<double> impulse(static_cast<size_t>(nthreads) * walls_.size() * D, 0.0);
     if (debris_) coupling_.assign(nthreads, {});
+    ghosts_.resize(nthreads);
 #pragma omp parallel
     {
       double* my_impulse = impulse.data() + static_cast<size_t>(omp_get_thread_num()) * walls_.size() * D;
       std::vector<CouplingNode>* my_coupling = debris_ ? &coupling_[omp_get_thread_num()] : nullptr;
+      std::vector<Ghost>* my_ghosts = &ghosts_[omp_get_thread_num()];
+      my_ghosts->clear();
 #pragma omp for schedule(dynamic, 8)
       for (long g = 0; g < ngb; ++g) {
         Lane acc[kNodes];
@@ -638,6 +646,9 @@ class MpmSolver final : public Simulation {
           for (int d = D - 1, r = k; d >= 0; --d, r /= kBlock) node[d] = blk[d] * kBlock + r % kBlock;
           for (int d = 0; d < D; ++d) v[d] = acc[k][1 + d] / m + dt * gravity_[d];
           uint8_t on_wall = 0;
+          // Ghost nodes (mpm::ghost_half_space): the reflection's offset.
+          Ghost ghost;
+          bool ambiguous = false;
           // Scene boundaries reaching this block.
           double xn[D];
           for (int d = 0; d < D; ++d) xn[d] = grid_lo_[d] + node[d] * dx_;
@@ -651,6 +662,27 @@ class MpmSolver final : public Simulation {
             for (int d = 0; d < D; ++d) before[d] = v[d];
             mpm::apply_wall<D>(v, n, faces, w.vb, w.bc, w.mu);
             for (int d = 0; d < D; ++d) my_impulse[g_bnd_[q] * D + d] += double(m) * (before[d] - v[d]);
+            if (w.bc == mpm::Bc::kSticky) {
+              ambiguous = true;
+            } else {
+              if (w.box)
+                mpm::ghost_box<D>(xn, w.ad, w.bd, dx_, ghost.offset, ghost.axes, ambiguous);
+              else
+                mpm::ghost_half_space<D>(xn, w.ad, w.bd, dx_, ghost.offset, ghost.axes, ambiguous);
+            }
+          }
+          if (domain_bc_ == mpm::Bc::kSticky) {
+            for (int d = 0; d < D; ++d)
+              ambiguous |= xn[d] < scene_.domain_lo[d] - mpm::kGhostDepth * dx_ ||
+                           xn[d] > scene_.domain_hi[d] + mpm::kGhostDepth * dx_;
+          } else {
+            mpm::ghost_domain<D>(xn, scene_.domain_lo.data(), scene_.domain_hi.data(), dx_, ghost.offset, ghost.axes,
+                                 ambiguous);
+          }
+          if (ghost.axes && !ambiguous) {
+            ghost.idx = base + k;
+            for (int d = 0; d < D; ++d) ghost.offset[d] += node[d];  // now the mirror node itself
+            my_ghosts->push_back(ghost);
           }
           // The domain box is a container: nodes on or beyond its faces are walls.
           for (int d = 0; d < D; ++d) {
@@ -689,10 +721,49 @@ class MpmSolver final : public Simulation {
         }
       }
     }
-    if (debris_) couple_debris(double(dt));
     std::fill(load_impulse_.begin(), load_impulse_.end(), 0.0);
     for (int t = 0; t < nthreads; ++t)
       for (size_t k = 0; k < load_impulse_.size(); ++k) load_impulse_[k] += impulse[t * load_impulse_.size() + k];
+    reflect_ghosts();
+    if (debris_) couple_debris(double(dt));
+  }
+
+  // Ghost nodes exchange tangential momentum with their reflection, a free node with water (mpm::ghost_exchange).
+  // Every exchange is computed from the velocities the grid update left, the ghosts' changes applied at once and
+  // the mirrors' summed after, in ghost-node order (the threads' lists merged and sorted), so that the result does
+  // not depend on the thread count. No wall load: the exchange is internal to the water.
+  void reflect_ghosts() {
+    all_ghosts_.clear();
+    for (const auto& list : ghosts_) all_ghosts_.insert(all_ghosts_.end(), list.begin(), list.end());
+    std::sort(all_ghosts_.begin(), all_ghosts_.end(), [](const Ghost& a, const Ghost& b) { return a.idx < b.idx; });
+    mirror_dv_.clear();
+    for (const Ghost& gh : all_ghosts_) {
+      int blk[D];
+      bool ok = true;
+      for (int d = 0; d < D; ++d) {
+        ok &= gh.offset[d] >= 0;
+        blk[d] = gh.offset[d] / kBlock;
+      }
+      if (!ok) continue;
+      const auto it = std::lower_bound(gkeys_.begin(), gkeys_.end(), pack_key<D>(blk));
+      if (it == gkeys_.end() || *it != pack_key<D>(blk)) continue;
+      int local = 0;
+      for (int d = 0; d < D; ++d) local = local * kBlock + gh.offset[d] % kBlock;
+      const size_t mi = static_cast<size_t>(it - gkeys_.begin()) * kNodes + local;
+      if (gm_[mi] <= T(0) || gwall_[mi]) continue;
+      T vg[D], vm[D], dvg[D];
+      MirrorChange c;
+      c.node = mi;
+      for (int d = 0; d < D; ++d) {
+        vg[d] = gv_[d][gh.idx];
+        vm[d] = gv_[d][mi];
+      }
+      mpm::ghost_exchange<D>(vg, gm_[gh.idx], vm, gm_[mi], gh.axes, dvg, c.dv);
+      for (int d = 0; d < D; ++d) gv_[d][gh.idx] += dvg[d];  // ghosts are never mirrors: no later read sees it
+      mirror_dv_.push_back(c);
+    }
+    for (const MirrorChange& c : mirror_dv_)
+      for (int d = 0; d < D; ++d) gv_[d][c.node] += c.dv[d];
   }
 
   // Whether a debris box may come within `margin` of the block's particles (a particle may sit up to one cell
@@ -1017,6 +1088,13 @@ class MpmSolver final : public Simulation {
   std::unique_ptr<DebrisCoupling> debris_;
   std::unique_ptr<InflowBoundary<D, T>> inflow_;
   std::vector<T> tag_;  // the inflow's buffer particles (1) and free water (0); empty without an inflow
+  std::vector<std::vector<Ghost>> ghosts_;  // per thread: this step's ghost nodes (reflect_ghosts)
+  std::vector<Ghost> all_ghosts_;            // all of them, in node order
+  struct MirrorChange {
+    size_t node;
+    T dv[D];
+  };
+  std::vector<MirrorChange> mirror_dv_;  // the mirrors' velocity changes, applied after every exchange
   std::vector<std::vector<CouplingNode>> coupling_;  // per thread: the nodes found in boxes this step
   std::vector<double> push_out_;  // per particle block and box: impulse and moment of pushed-out particles
   // Nodes up to one cell outside a box are its moving-wall nodes: then a water particle touching the box puts

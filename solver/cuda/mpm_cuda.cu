@@ -126,6 +126,9 @@ struct View {
   const uint64_t* gkeys;
   T* grid;  // kChannels x nodes, channel-major
   uint8_t* gwall;
+  int64_t* ghost_mirror;  // per node: its reflection's grid index (mpm::ghost_half_space), or -1
+  uint8_t* ghost_axes;    // per node: the normal axes the reflection keeps
+  T* ghost_dv;            // D x nodes: a ghost's mirror's velocity change (mpm::ghost_exchange)
   size_t nodes;
   // constants
   T dx, inv_dx, rho, K, gamma, mu, psi, fill_tol, inv_cell_volume;
@@ -137,6 +140,25 @@ struct View {
   int domain_bc;
   T domain_mu;
   double* impulse;  // walls x D, or null when no load cell reads it
+
+  // Grid index of node `node` (global node coordinates) by a binary search of the sorted grid blocks; -1 where
+  // no block holds it.
+  FLUME_HD int64_t grid_index(const int* node) const {
+    int blk[D], local = 0;
+    for (int d = 0; d < D; ++d) {
+      if (node[d] < 0) return -1;
+      blk[d] = node[d] / kBlock;
+      local = local * kBlock + node[d] % kBlock;
+    }
+    const uint64_t key = pack_key<D>(blk);
+    size_t lo = 0, hi = nodes / kNodes;
+    while (lo < hi) {
+      const size_t mid = (lo + hi) / 2;
+      if (gkeys[mid] < key) lo = mid + 1; else hi = mid;
+    }
+    if (lo == nodes / kNodes || gkeys[lo] != key) return -1;
+    return static_cast<int64_t>(lo * kNodes + local);
+  }
 
   // Grid index of node `node` (global node coordinates) seen from particle block `pb`: the node lies in one
   // of the block's 3^D neighbours because a particle is re-sorted before its stencil leaves them.
@@ -250,6 +272,7 @@ struct GridUpdate {
     if (m <= T(0)) {
       for (int c = 0; c < View<D, T>::kChannels; ++c) s.grid[c * s.nodes + idx] = T(0);
       s.gwall[idx] = 0;
+      s.ghost_mirror[idx] = -1;
       return;
     }
     int blk[D], node[D];
@@ -261,6 +284,9 @@ struct GridUpdate {
     uint8_t on_wall = 0;
     double xn[D];
     for (int d = 0; d < D; ++d) xn[d] = s.grid_lo_d[d] + node[d] * s.dx_d;
+    int mirror[D] = {};
+    unsigned axes = 0;
+    bool ambiguous = false;
     for (int k = 0; k < s.n_walls; ++k) {
       const Wall<D, T>& w = s.walls[k];
       double n[2 * D][D];
@@ -272,6 +298,27 @@ struct GridUpdate {
       mpm::apply_wall<D>(v, n, faces, w.vb, static_cast<mpm::Bc>(w.bc), w.mu);
       if (s.impulse)
         for (int d = 0; d < D; ++d) atomic_add(&s.impulse[k * D + d], double(m) * (before[d] - v[d]));
+      if (static_cast<mpm::Bc>(w.bc) == mpm::Bc::kSticky) {
+        ambiguous = true;
+      } else {
+        if (w.box)
+          mpm::ghost_box<D>(xn, w.a, w.b, s.dx_d, mirror, axes, ambiguous);
+        else
+          mpm::ghost_half_space<D>(xn, w.a, w.b, s.dx_d, mirror, axes, ambiguous);
+      }
+    }
+    if (static_cast<mpm::Bc>(s.domain_bc) == mpm::Bc::kSticky) {
+      for (int d = 0; d < D; ++d)
+        ambiguous = ambiguous || xn[d] < s.domain_lo[d] - mpm::kGhostDepth * s.dx_d ||
+                    xn[d] > s.domain_hi[d] + mpm::kGhostDepth * s.dx_d;
+    } else {
+      mpm::ghost_domain<D>(xn, s.domain_lo, s.domain_hi, s.dx_d, mirror, axes, ambiguous);
+    }
+    s.ghost_mirror[idx] = -1;
+    if (axes && !ambiguous) {
+      for (int d = 0; d < D; ++d) mirror[d] += node[d];
+      s.ghost_mirror[idx] = s.grid_index(mirror);
+      s.ghost_axes[idx] = static_cast<uint8_t>(axes);
     }
     for (int d = 0; d < D; ++d) {
       T n[D] = {};
@@ -290,6 +337,43 @@ struct GridUpdate {
     s.grid[(2 + D) * s.nodes + idx] *= s.inv_cell_volume;  // the node's fill (mpm::fill_correction)
     s.gwall[idx] = on_wall;
     for (int d = 0; d < D; ++d) s.grid[(1 + d) * s.nodes + idx] = v[d];
+  }
+};
+
+// Ghost nodes exchange tangential momentum with their reflection (mpm::ghost_exchange; MpmSolver::reflect_ghosts),
+// once every node is updated, in two passes: each ghost computes the exchange from the velocities the update
+// left, applies its own change and keeps its mirror's (mirrors are free nodes, so the first pass reads no node it
+// writes); then the mirrors' changes are added, atomically where a mirror is shared.
+template <int D, typename T>
+FLUME_HD bool ghost_pair(const View<D, T>& s, size_t idx, int64_t& mi) {
+  mi = s.ghost_mirror[idx];
+  return mi >= 0 && s.grid[idx] > T(0) && s.grid[mi] > T(0) && !s.gwall[mi];
+}
+template <int D, typename T>
+struct GhostExchange {
+  View<D, T> s;
+  FLUME_HD void operator()(size_t idx) const {
+    int64_t mi;
+    if (!ghost_pair(s, idx, mi)) return;
+    T vg[D], vm[D], dvg[D], dvm[D];
+    for (int d = 0; d < D; ++d) {
+      vg[d] = s.grid[(1 + d) * s.nodes + idx];
+      vm[d] = s.grid[(1 + d) * s.nodes + mi];
+    }
+    mpm::ghost_exchange<D>(vg, s.grid[idx], vm, s.grid[mi], s.ghost_axes[idx], dvg, dvm);
+    for (int d = 0; d < D; ++d) {
+      s.grid[(1 + d) * s.nodes + idx] = vg[d] + dvg[d];
+      s.ghost_dv[d * s.nodes + idx] = dvm[d];
+    }
+  }
+};
+template <int D, typename T>
+struct GhostMirrorUpdate {
+  View<D, T> s;
+  FLUME_HD void operator()(size_t idx) const {
+    int64_t mi;
+    if (!ghost_pair(s, idx, mi)) return;
+    for (int d = 0; d < D; ++d) atomic_add(&s.grid[(1 + d) * s.nodes + mi], s.ghost_dv[d * s.nodes + idx]);
   }
 };
 
@@ -495,6 +579,8 @@ class MpmCuda final : public Simulation {
     const T lift = T(double(dt) * scene_.basin.forcing.hold(time_) * std::fabs(scene_.solver.gravity[D - 1]));
     thr::for_each(thr::device, first, first + n_, P2G<D, T>{s, T(dt), lift});
     thr::for_each(thr::device, first, first + s.nodes, GridUpdate<D, T>{s, T(dt)});
+    thr::for_each(thr::device, first, first + s.nodes, GhostExchange<D, T>{s});
+    thr::for_each(thr::device, first, first + s.nodes, GhostMirrorUpdate<D, T>{s});
     if (has_loads_) thr::copy(impulse_.begin(), impulse_.end(), load_impulse_.begin());
     thr::for_each(thr::device, first, first + n_, G2P<D, T>{s, T(dt), T(mpm::fill_rate(dt, c_, dx_))});
     host_fresh_ = false;
@@ -539,7 +625,8 @@ class MpmCuda final : public Simulation {
     for (size_t i = 0; i < n_; ++i) p[i] = mpm::tait_pressure(double(e[i]), double(K_), double(gamma_));
   }
   size_t grid_bytes() const override {
-    return grid_.capacity() * sizeof(T) + gwall_.capacity() +
+    return grid_.capacity() * sizeof(T) + gwall_.capacity() + ghost_axes_.capacity() +
+           ghost_mirror_.capacity() * sizeof(int64_t) + ghost_dv_.capacity() * sizeof(T) +
            (gkeys_.capacity() + pkeys_.capacity()) * sizeof(uint64_t) + p_nbr_.capacity() * sizeof(int32_t);
   }
   size_t active_blocks() const override { return gkeys_.size(); }
@@ -715,6 +802,9 @@ class MpmCuda final : public Simulation {
     s.gkeys = raw(gkeys_);
     s.grid = raw(grid_);
     s.gwall = raw(gwall_);
+    s.ghost_mirror = raw(ghost_mirror_);
+    s.ghost_axes = raw(ghost_axes_);
+    s.ghost_dv = raw(ghost_dv_);
     s.nodes = gkeys_.size() * kNodes;
     s.dx = T(dx_);
     s.inv_dx = inv_dx_;
@@ -772,6 +862,9 @@ class MpmCuda final : public Simulation {
     const size_t nodes = gkeys_.size() * kNodes;
     grid_.resize(kChannels * nodes);
     gwall_.resize(nodes);
+    ghost_mirror_.resize(nodes);
+    ghost_axes_.resize(nodes);
+    ghost_dv_.resize(D * nodes);
     needs_sort_ = false;
   }
 
@@ -867,7 +960,9 @@ class MpmCuda final : public Simulation {
   thr::device_vector<uint32_t> order_;
   thr::device_vector<uint64_t> keys_, pkeys_, gkeys_, nbr_keys_;
   thr::device_vector<T> grid_;
-  thr::device_vector<uint8_t> gwall_;
+  thr::device_vector<uint8_t> gwall_, ghost_axes_;
+  thr::device_vector<int64_t> ghost_mirror_;
+  thr::device_vector<T> ghost_dv_;  // D x nodes
   thr::device_vector<Wall<D, T>> walls_;
   thr::device_vector<double> impulse_;
   thr::device_vector<double> fill_work_;

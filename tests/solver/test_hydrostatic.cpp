@@ -103,24 +103,15 @@ void check_column(int dim, const std::string& precision, const std::string& psi,
 // still swings by 25% after 1.5 s. docs/validation.md has the numbers.)
 TEST(Hydrostatic, Column2DDoubleJbar) { check_column(2, "double", "0.9"); }
 TEST(Hydrostatic, Column2DFloatJbar) { check_column(2, "float", "0.9999"); }
-// Known failure, kept visible: the 2D column passes at 1.5 s, but it has not settled for good. From about 1 s
-// a pair of convection cells grows along the slip side walls (up within a cell of each wall, down in the
-// middle), as in 3D (below): at dx = 0.01 m, K = 2e6 Pa the kinetic energy goes 7.9e-5 J/m at 1 s, 3.0e-4 at
-// 2 s, 4.4e-4 at 2.5 s, max speed 1.8e-2 m/s at 2.5 s against the 1.4e-2 allowed. It scales with the
-// compressibility (K = 2e7 Pa: 1.7e-5 J/m at 2.5 s, no growth), does not depend on the J-bar psi (0, 0.9,
-// 0.9999), the volume constraint, the precision, ppc (4 or 9) or a ten times larger viscosity, and vanishes
-// with sticky side walls (1.6e-7 J/m at 2.5 s), which carry part of the weight instead. Issue 2 stays open on it.
-TEST(Hydrostatic, DISABLED_Column2DDoubleJbarStaysSettledTo3s) { check_column(2, "double", "0.9", false, "slip", 3.0); }
-// Known failure, kept visible: with slip side walls the 3D column does not settle. A convection cell forms
-// after about 1 s and persists: up within 1.5 cells of the side walls, down in the middle (mean vertical speed
-// +1.0e-2 and -1.2e-2 m/s at 2 s, max 2.8e-2 m/s at the vertical corners, against the 1.4e-2 allowed). The
-// pressure of the wall particles is 1.7% above that of the middle ones at the same height, and their vertical
-// gradient 1.3% steeper: a horizontal pressure difference a fluid at rest cannot hold. It does not come from
-// the J-bar mixing (the same at psi 0.9 and 0.9999), the volume constraint (the same without it) or the
-// initial load (the same preloaded). With sticky side walls the motion decays (max speed 1.1e-3 m/s at 1.5 s)
-// but the walls then carry 21% of the weight through the held near-wall water, which a fluid at rest cannot
-// either; check_column's side_condition argument reproduces both. Issue 2 stays open on it.
-TEST(Hydrostatic, DISABLED_Column3DFloatJbar) { check_column(3, "float", "0.9"); }
+// And it stays settled. Before the ghost nodes' mirror (mpm::ghost_exchange) a pair of convection cells grew
+// from about 1 s along the slip side walls (up at the walls, down in the middle): max speed 1.6e-2 m/s at 3 s
+// here, and this check failed; the ghost nodes inside the walls took their tangential velocity from their own
+// few particles. Now 7.6e-4 m/s at 3 s.
+TEST(Hydrostatic, Column2DDoubleJbarStaysSettledTo3s) { check_column(2, "double", "0.9", false, "slip", 3.0); }
+// 3D at dx = H/20: max speed 3.1e-3 m/s at 1.5 s, bottom pressure -1.6%, slope +0.7%. Before the ghost nodes'
+// mirror a convection cell along the slip side walls carried 2.9e-2 m/s (the limit is 1.4e-2), and sticky side
+// walls, which stop it, carried 21% of the weight (`side_condition` reproduces that).
+TEST(Hydrostatic, Column3DFloatJbar) { check_column(3, "float", "0.9"); }
 
 }  // namespace
 }  // namespace flume

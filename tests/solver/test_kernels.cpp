@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <utility>
+#include <vector>
 
 #include "solver/mpm_kernels.h"
 
@@ -98,6 +100,48 @@ TEST(Tait, EnergyDerivativeIsMinusPressure) {
       EXPECT_NEAR(dW, -tait_pressure(e, 2e6, g), 1e-6 * std::fabs(tait_pressure(e, 2e6, g)))
           << "gamma " << g << " e " << e;
     }
+}
+
+// The free-slip mirror's exchange between a ghost node and its mirror node: tangential momentum conserved, the
+// tangential velocities equal afterwards, the normal axis untouched, kinetic energy never raised.
+TEST(GhostMirror, ExchangeConservesMomentumAndCannotAddEnergy) {
+  using flume::mpm::ghost_exchange;
+  const double mg = 0.03, mm = 1.2;
+  const double vg[3] = {0.9, -0.4, 0.0}, vm[3] = {0.2, 0.5, 0.3};
+  double dvg[3], dvm[3];
+  ghost_exchange<3>(vg, mg, vm, mm, 1u << 2, dvg, dvm);  // normal along z
+  for (int a = 0; a < 3; ++a) EXPECT_NEAR(mg * dvg[a] + mm * dvm[a], 0.0, 1e-16) << a;
+  EXPECT_EQ(dvg[2], 0.0);
+  EXPECT_EQ(dvm[2], 0.0);
+  for (int a = 0; a < 2; ++a) EXPECT_NEAR(vg[a] + dvg[a], vm[a] + dvm[a], 1e-15) << a;
+  double before = 0, after = 0;
+  for (int a = 0; a < 3; ++a) {
+    before += 0.5 * (mg * vg[a] * vg[a] + mm * vm[a] * vm[a]);
+    after += 0.5 * (mg * (vg[a] + dvg[a]) * (vg[a] + dvg[a]) + mm * (vm[a] + dvm[a]) * (vm[a] + dvm[a]));
+  }
+  EXPECT_LT(after, before);
+  // Equal velocities: nothing to exchange.
+  ghost_exchange<3>(vm, mg, vm, mm, 1u << 2, dvg, dvm);
+  for (int a = 0; a < 3; ++a) {
+    EXPECT_EQ(dvg[a], 0.0);
+    EXPECT_EQ(dvm[a], 0.0);
+  }
+}
+
+// The mirror node of a ghost is the node nearest its reflection, also when the wall lies between grid lines.
+TEST(GhostMirror, MirrorNodeIsNearestTheReflection) {
+  using flume::mpm::ghost_half_space;
+  const double n[2] = {-1.0, 0.0};  // a solid x > 4.45 (the quay's upstream face), fluid at x < 4.45
+  const double point[2] = {4.45, 0.0};
+  for (const auto& [x, expect] : std::vector<std::pair<double, int>>{{4.46, -1}, {4.48, -3}, {4.455, 0}}) {
+    int offset[2] = {0, 0};
+    unsigned axes = 0;
+    bool ambiguous = false;
+    const double xn[2] = {x, 0.1};
+    ghost_half_space<2>(xn, point, n, 0.02, offset, axes, ambiguous);
+    EXPECT_EQ(offset[0], expect) << "node at x = " << x;  // 4.455 is a quarter cell in: held, not a ghost
+    EXPECT_FALSE(ambiguous);
+  }
 }
 
 }  // namespace

@@ -227,12 +227,15 @@ Series gauge(const fs::path& run, const std::string& name) {
           h5::read_vector(f, "/gauges/" + name + "/elevation")};
 }
 
-// (c) The check in 2D at dx = 0.04 m: waseda_2d for 5 s (the bore passes WG4 at 6.15 m by 3.4 s),
+// (c) The check in 2D at dx = 0.02 m: waseda_2d for 5 s (the bore passes WG4 at 6.15 m by 3.2 s),
 // then waseda_apron_2d fed from its apron_inflow section. WG3 and WG4 of the two runs: RMS difference over
-// the record within 10% of the full run's peak (eta above still water, as the gauges report it).
+// the record within 10% of the full run's peak (eta above still water, as the gauges report it). At dx = 0.04 m
+// the water over the apron (0.025 m above still water) is thinner than one cell at WG3 and half a cell at WG4, so
+// that comparison says more about sub-cell films than about the inflow (with the free-slip mirror it gave WG3
+// 10.0 %, WG4 6.6 %; docs/waseda.md).
 TEST(Apron, Apron2dReproducesWg3AndWg4OfTheRunItWasFedFrom) {
   const fs::path dir = temp_dir("wg");
-  const std::vector<Override> common = {{"solver.dx", "0.04"}, {"solver.end_time", "5"}};
+  const std::vector<Override> common = {{"solver.dx", "0.02"}, {"solver.end_time", "5"}};
   const std::string src = std::string(FLUME_SOURCE_DIR) + "/scenes/waseda/";
   const RunOutcome full = run_scene(load_scene(src + "waseda_2d.json", common), {}, (dir / "full").string());
   ASSERT_EQ(full.status, RunStatus::kOk) << full.message;
