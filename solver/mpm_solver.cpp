@@ -733,9 +733,17 @@ class MpmSolver final : public Simulation {
   // the mirrors' summed after, in ghost-node order (the threads' lists merged and sorted), so that the result does
   // not depend on the thread count. No wall load: the exchange is internal to the water.
   void reflect_ghosts() {
+    // Each thread's list is in node order already (a dynamic schedule hands a thread its chunks in increasing
+    // order), so merging the lists suffices.
     all_ghosts_.clear();
-    for (const auto& list : ghosts_) all_ghosts_.insert(all_ghosts_.end(), list.begin(), list.end());
-    std::sort(all_ghosts_.begin(), all_ghosts_.end(), [](const Ghost& a, const Ghost& b) { return a.idx < b.idx; });
+    const auto by_node = [](const Ghost& a, const Ghost& b) { return a.idx < b.idx; };
+    for (const auto& list : ghosts_) {
+      const auto mid = static_cast<std::ptrdiff_t>(all_ghosts_.size());
+      all_ghosts_.insert(all_ghosts_.end(), list.begin(), list.end());
+      std::inplace_merge(all_ghosts_.begin(), all_ghosts_.begin() + mid, all_ghosts_.end(), by_node);
+    }
+    if (!std::is_sorted(all_ghosts_.begin(), all_ghosts_.end(), by_node))  // a schedule that does not keep the order
+      std::sort(all_ghosts_.begin(), all_ghosts_.end(), by_node);
     mirror_dv_.clear();
     for (const Ghost& gh : all_ghosts_) {
       int blk[D];
