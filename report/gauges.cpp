@@ -160,16 +160,16 @@ void print_summary(const std::string& gauge, const Run& r) {
   const GaugeSummary s = summarize_gauge(rec.time, rec.value, threshold > 0 ? threshold : 0);
   std::printf("%s %s: ", gauge.c_str(), r.label.c_str());
   if (s.has_peak)
-    std::printf("peak %.4f %s at %.3f s", s.peak, rec.unit.c_str(), s.peak_time);
+    std::printf("peak %.4f %s at %.3f s", s.peak + 0.0, rec.unit.c_str(), s.peak_time);  // + 0.0: no "-0.0000"
   else
     std::printf("peak none (no finite sample)");
   if (threshold <= 0)
     std::printf(", arrival n/a (unit %s)\n", rec.unit.c_str());
   else if (s.arrived)
-    std::printf(", arrival %.3f s (5 mm above the first reading, %.4f %s)\n", s.arrival_time, s.first,
+    std::printf(", arrival %.3f s (5 mm above the first reading, %.4f %s)\n", s.arrival_time, s.first + 0.0,
                 rec.unit.c_str());
   else
-    std::printf(", arrival none (never 5 mm above the first reading, %.4f %s)\n", s.first, rec.unit.c_str());
+    std::printf(", arrival none (never 5 mm above the first reading, %.4f %s)\n", s.first + 0.0, rec.unit.c_str());
 }
 
 }  // namespace
