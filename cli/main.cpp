@@ -8,6 +8,7 @@
 #include "calibration/commands.h"
 #include "campaigns/commands.h"
 #include "flume_version.h"
+#include "report/gauges.h"
 #include "report/paths.h"
 #include "report/report.h"
 #include "solver/commands.h"
@@ -31,6 +32,7 @@ const std::vector<Command>& commands() {
       {"campaign", flume::campaign_main, "campaign run SPEC.json --db FILE [--workers N] | status --db FILE | export --db FILE --csv OUT"},
       {"report", flume::report_main, "report --db FILE --campaign NAME --out DIR [--thresholds metric=v1,v2 ...]   HTML/JSON/CSV report"},
       {"debris-paths", flume::report::debris_paths_main, "debris-paths RUN_DIR [RUN_DIR ...] --out FILE.svg   top-down debris paths with the Naito and Nistor guidelines"},
+      {"gauges", flume::report::gauges_main, "gauges RUN_DIR[=LABEL] [RUN_DIR[=LABEL] ...] --out FILE.svg [--gauges WG1,WG2,...] [--t-max S] [--title TEXT]   gauge records of runs, peaks and arrivals"},
       {"model", flume::model_main, "model ishigami|test --out DIR [--set name=value ...]   analytic stand-ins for `run`"},
 #ifdef FLUME_HAVE_STUDY
       {"study", flume::study::study_main, "study tradeoff SPEC.json --db FILE [--out DIR] [--workers N]   error against cost over fidelity settings, Pareto front"},

@@ -1,0 +1,327 @@
+// `flume gauges RUN_DIR[=LABEL] ... --out FILE.svg`: the free-surface gauge records of one or more finished
+// runs, one panel per gauge (stacked, sharing the time axis) with one line per run, and on stdout one line per
+// gauge and run with the peak, its time and the arrival, so that docs can quote the numbers.
+#include "report/gauges.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <limits>
+#include <map>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "common/errors.h"
+#include "common/plot/figure.h"
+#include "store/h5/run_file.h"
+
+namespace flume::report {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr const char* kCli = "flume gauges";
+constexpr double kArrivalThresholdM = 0.005;  // 5 mm, as `flume run` has it for run.json's arrival_s
+
+struct Record {
+  std::vector<double> time, value;
+  std::string unit = "m";
+};
+
+struct Run {
+  std::string dir, label, h5_file;
+  std::vector<std::string> gauges;  // natural order
+  std::map<std::string, Record> records;
+};
+
+std::string join(const std::vector<std::string>& names) {
+  std::string s;
+  for (const auto& n : names) s += (s.empty() ? "" : ", ") + n;
+  return s;
+}
+
+// "DIR=LABEL" (split at the last '=', unless the whole argument is an existing path); the label defaults to
+// the folder's name.
+std::pair<std::string, std::string> parse_run_arg(const std::string& a) {
+  std::string dir = a, label;
+  const std::size_t eq = a.rfind('=');
+  if (eq != std::string::npos && !fs::exists(a)) {
+    dir = a.substr(0, eq);
+    label = a.substr(eq + 1);
+    if (dir.empty()) throw InputError(kCli, a, "RUN_DIR=LABEL needs a run folder before '='");
+    if (label.empty()) throw InputError(kCli, a, "RUN_DIR=LABEL needs a label after '='");
+  }
+  if (label.empty()) {
+    fs::path p = fs::absolute(fs::path(dir)).lexically_normal();
+    if (p.filename().empty()) p = p.parent_path();
+    label = p.filename().string();
+    if (label.empty()) label = dir;
+  }
+  return {dir, label};
+}
+
+std::vector<std::string> parse_gauge_list(const std::string& option, const std::string& value) {
+  std::vector<std::string> names;
+  std::size_t start = 0;
+  while (true) {
+    const std::size_t comma = value.find(',', start);
+    const std::string name = value.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+    if (name.empty()) throw InputError(kCli, option, "'" + value + "': a comma-separated list of gauge names, none empty");
+    if (std::find(names.begin(), names.end(), name) == names.end()) names.push_back(name);
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  return names;
+}
+
+double parse_positive(const std::string& option, const std::string& value) {
+  char* end = nullptr;
+  const double v = std::strtod(value.c_str(), &end);
+  if (value.empty() || end != value.c_str() + value.size() || !std::isfinite(v) || v <= 0)
+    throw InputError(kCli, option, "'" + value + "': a positive number of seconds");
+  return v;
+}
+
+// An optional string attribute `unit` on the elevation dataset or the gauge's group; "m" without one.
+std::string gauge_unit(const h5::Reader& h5, const std::string& gauge_group) {
+  for (const std::string& where : {gauge_group + "/elevation", gauge_group}) {
+    try {
+      const std::string u = h5.string_attribute(where, "unit");
+      if (!u.empty()) return u;
+    } catch (const std::runtime_error&) {
+      // no such attribute
+    }
+  }
+  return "m";
+}
+
+Run open_run(const std::string& dir, const std::string& label) {
+  Run r;
+  r.dir = dir;
+  r.label = label;
+  r.h5_file = (fs::path(dir) / "result.h5").string();
+  if (!fs::is_directory(dir)) throw InputError(dir, "", "no such run folder (the --out folder of a `flume run`)");
+  if (!fs::exists(r.h5_file)) throw InputError(r.h5_file, "", "missing: the run did not finish");
+  return r;
+}
+
+void read_gauges(Run& r, const std::vector<std::string>* wanted, double t_max) {
+  std::unique_ptr<h5::Reader> h5;
+  try {
+    h5 = std::make_unique<h5::Reader>(r.h5_file);
+  } catch (const std::runtime_error&) {
+    throw InputError(r.h5_file, "", "cannot open as an HDF5 file");
+  }
+  if (!h5->exists("/gauges")) throw InputError(r.h5_file, "/gauges", "missing: the run recorded no gauges");
+  r.gauges = h5->list("/gauges");
+  sort_gauge_names(r.gauges);
+  if (r.gauges.empty()) throw InputError(r.h5_file, "/gauges", "holds no gauges");
+  const std::vector<std::string>& names = wanted ? *wanted : r.gauges;
+  for (const std::string& name : names) {
+    const std::string group = "/gauges/" + name;
+    if (std::find(r.gauges.begin(), r.gauges.end(), name) == r.gauges.end())
+      throw InputError(r.h5_file, group, "missing: the run has gauges " + join(r.gauges));
+    Record rec;
+    for (const char* ds : {"time", "elevation"})
+      if (!h5->exists(group + "/" + ds)) throw InputError(r.h5_file, group + "/" + ds, "missing");
+    const std::vector<double> t = h5->read_vector(group + "/time"), v = h5->read_vector(group + "/elevation");
+    if (t.size() != v.size())
+      throw InputError(r.h5_file, group, "time has " + std::to_string(t.size()) + " samples, elevation " +
+                                             std::to_string(v.size()) + ": they must match");
+    for (std::size_t i = 0; i < t.size(); ++i)
+      if (t[i] <= t_max) {
+        rec.time.push_back(t[i]);
+        rec.value.push_back(v[i]);
+      }
+    if (rec.time.empty())
+      throw InputError(r.h5_file, group + "/time",
+                       t.empty() ? "is empty" : "has no sample at or before --t-max " + std::to_string(t_max) + " s");
+    rec.unit = gauge_unit(*h5, group);
+    r.records[name] = std::move(rec);
+  }
+}
+
+// 5 mm in the record's unit; 0 (no arrival) for a unit that is not a length in m, cm or mm.
+double arrival_threshold(const std::string& unit) {
+  if (unit == "m") return kArrivalThresholdM;
+  if (unit == "cm") return kArrivalThresholdM * 100;
+  if (unit == "mm") return kArrivalThresholdM * 1000;
+  return 0;
+}
+
+void print_summary(const std::string& gauge, const Run& r) {
+  const Record& rec = r.records.at(gauge);
+  const double threshold = arrival_threshold(rec.unit);
+  const GaugeSummary s = summarize_gauge(rec.time, rec.value, threshold > 0 ? threshold : 0);
+  std::printf("%s %s: ", gauge.c_str(), r.label.c_str());
+  if (s.has_peak)
+    std::printf("peak %.4f %s at %.3f s", s.peak + 0.0, rec.unit.c_str(), s.peak_time);  // + 0.0: no "-0.0000"
+  else
+    std::printf("peak none (no finite sample)");
+  if (threshold <= 0)
+    std::printf(", arrival n/a (unit %s)\n", rec.unit.c_str());
+  else if (s.arrived)
+    std::printf(", arrival %.3f s (5 mm above the first reading, %.4f %s)\n", s.arrival_time, s.first + 0.0,
+                rec.unit.c_str());
+  else
+    std::printf(", arrival none (never 5 mm above the first reading, %.4f %s)\n", s.first + 0.0, rec.unit.c_str());
+}
+
+}  // namespace
+
+GaugeSummary summarize_gauge(const std::vector<double>& time, const std::vector<double>& value, double threshold) {
+  GaugeSummary s;
+  bool have_first = false;
+  for (std::size_t i = 0; i < value.size() && i < time.size(); ++i) {
+    const double e = value[i];
+    if (!std::isfinite(e)) continue;
+    if (!have_first) {
+      s.first = e;
+      have_first = true;
+    }
+    if (!s.has_peak || e > s.peak) {
+      s.peak = e;
+      s.peak_time = time[i];
+      s.has_peak = true;
+    }
+    if (!s.arrived && threshold > 0 && e >= s.first + threshold) {
+      s.arrived = true;
+      s.arrival_time = time[i];
+    }
+  }
+  return s;
+}
+
+void sort_gauge_names(std::vector<std::string>& names) {
+  // Runs of digits compare by value, the rest character by character; ties (WG01, WG1) by plain order.
+  auto natural_less = [](const std::string& a, const std::string& b) {
+    std::size_t i = 0, j = 0;
+    while (i < a.size() && j < b.size()) {
+      const bool da = std::isdigit(static_cast<unsigned char>(a[i])), db = std::isdigit(static_cast<unsigned char>(b[j]));
+      if (da && db) {
+        std::size_t ie = i, je = j;
+        while (ie < a.size() && std::isdigit(static_cast<unsigned char>(a[ie]))) ++ie;
+        while (je < b.size() && std::isdigit(static_cast<unsigned char>(b[je]))) ++je;
+        std::size_t is = i, js = j;  // skip leading zeros
+        while (is + 1 < ie && a[is] == '0') ++is;
+        while (js + 1 < je && b[js] == '0') ++js;
+        if (ie - is != je - js) return ie - is < je - js;
+        const int c = a.compare(is, ie - is, b, js, je - js);
+        if (c != 0) return c < 0;
+        i = ie;
+        j = je;
+      } else {
+        if (a[i] != b[j]) return a[i] < b[j];
+        ++i;
+        ++j;
+      }
+    }
+    if ((i < a.size()) != (j < b.size())) return j < b.size();
+    return a < b;
+  };
+  std::sort(names.begin(), names.end(), natural_less);
+}
+
+int gauges_main(int argc, char** argv) {
+  const char* usage =
+      "usage: flume gauges RUN_DIR[=LABEL] [RUN_DIR[=LABEL] ...] --out FILE.svg [--gauges WG1,WG2,...]\n"
+      "                    [--t-max S] [--title TEXT]\n"
+      "  one panel per gauge (default: every gauge of the first run), one line per run (LABEL: default the\n"
+      "  folder's name); prints per gauge and run the peak, its time and the arrival (the first time the record\n"
+      "  rises 5 mm above its first reading), over t <= --t-max when given\n";
+  try {
+    std::vector<std::pair<std::string, std::string>> run_args;  // dir, label
+    std::string out, title;
+    std::vector<std::string> wanted;
+    bool have_wanted = false;
+    double t_max = std::numeric_limits<double>::infinity();
+    for (int i = 1; i < argc; ++i) {
+      const std::string a = argv[i];
+      auto value = [&]() -> std::string {
+        if (i + 1 >= argc) throw InputError(kCli, a, "needs a value");
+        return argv[++i];
+      };
+      if (a == "--help" || a == "-h") {
+        std::fputs(usage, stdout);
+        return kExitOk;
+      } else if (a == "--out") {
+        out = value();
+      } else if (a == "--gauges") {
+        wanted = parse_gauge_list(a, value());
+        have_wanted = true;
+      } else if (a == "--t-max") {
+        t_max = parse_positive(a, value());
+      } else if (a == "--title") {
+        title = value();
+      } else if (a.rfind("--", 0) == 0 || (a.size() > 1 && a[0] == '-')) {
+        throw InputError(kCli, a, "unknown option (allowed: --out, --gauges, --t-max, --title, --help)");
+      } else {
+        run_args.push_back(parse_run_arg(a));
+      }
+    }
+    if (run_args.empty()) throw InputError(kCli, "RUN_DIR", "at least one run folder is required");
+    if (out.empty()) throw InputError(kCli, "--out", "is required (an .svg file)");
+
+    std::vector<Run> runs;
+    for (const auto& [dir, label] : run_args) runs.push_back(open_run(dir, label));
+    // The first run decides the default gauges; every run must have each of them.
+    read_gauges(runs[0], have_wanted ? &wanted : nullptr, t_max);
+    if (!have_wanted) wanted = runs[0].gauges;
+    for (std::size_t k = 1; k < runs.size(); ++k) {
+      read_gauges(runs[k], &wanted, t_max);
+      for (const std::string& name : wanted)
+        if (runs[k].records.at(name).unit != runs[0].records.at(name).unit)
+          throw InputError(runs[k].h5_file, "/gauges/" + name,
+                           "unit '" + runs[k].records.at(name).unit + "', but " + runs[0].h5_file + " has '" +
+                               runs[0].records.at(name).unit + "': one panel needs one unit");
+    }
+
+    double t_lo = std::numeric_limits<double>::infinity(), t_hi = -t_lo;
+    for (const Run& r : runs)
+      for (const auto& [name, rec] : r.records)
+        for (double t : rec.time)
+          if (std::isfinite(t)) {
+            t_lo = std::min(t_lo, t);
+            t_hi = std::max(t_hi, t);
+          }
+    if (std::isfinite(t_max) && t_hi < t_max) t_hi = t_max;
+    if (!(t_hi > t_lo)) t_hi = t_lo + 1;
+
+    const int n = static_cast<int>(wanted.size());
+    plot::Figure fig(n, 1, 1000, 80 + 260 * n);
+    if (!title.empty()) fig.title(title);
+    for (int g = 0; g < n; ++g) {
+      const std::string& name = wanted[static_cast<std::size_t>(g)];
+      plot::Axes& ax = fig.axes(g, 0);
+      ax.title(name).ylabel("eta (" + runs[0].records.at(name).unit + ")").xlim(t_lo, t_hi);
+      if (g == n - 1) ax.xlabel("t (s)");
+      for (std::size_t k = 0; k < runs.size(); ++k) {
+        const Record& rec = runs[k].records.at(name);
+        // The same colour for a run in every panel; dashed once the palette's eight colours are used up.
+        ax.line(rec.time, rec.value,
+                {.color = plot::palette(k), .width = 1.5, .dash = k < 8 ? plot::Dash::kSolid : plot::Dash::kDashed,
+                 .label = g == 0 ? runs[k].label : ""});
+      }
+      if (g == 0) ax.legend(plot::Legend::kUpperLeft);  // before the arrival the records are flat
+    }
+    for (const std::string& name : wanted)
+      for (const Run& r : runs) print_summary(name, r);
+    fig.save(out);
+    std::printf("wrote %s\n", out.c_str());
+    return kExitOk;
+  } catch (const InputError& e) {
+    std::fprintf(stderr, "%s\n", e.what());
+    std::fputs(usage, stderr);
+    return kExitInvalidInput;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "%s: internal error: %s\n", kCli, e.what());
+    return kExitInternal;
+  }
+}
+
+}  // namespace flume::report
