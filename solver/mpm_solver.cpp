@@ -744,8 +744,14 @@ class MpmSolver final : public Simulation {
     }
     if (!std::is_sorted(all_ghosts_.begin(), all_ghosts_.end(), by_node))  // a schedule that does not keep the order
       std::sort(all_ghosts_.begin(), all_ghosts_.end(), by_node);
-    mirror_dv_.clear();
-    for (const Ghost& gh : all_ghosts_) {
+    // The exchanges in parallel (each writes its own ghost and its own entry), the mirrors' changes in order.
+    const long count = static_cast<long>(all_ghosts_.size());
+    mirror_dv_.resize(all_ghosts_.size());
+#pragma omp parallel for schedule(static)
+    for (long q = 0; q < count; ++q) {
+      const Ghost& gh = all_ghosts_[q];
+      MirrorChange& c = mirror_dv_[q];
+      c.node = kNoMirror;
       int blk[D];
       bool ok = true;
       for (int d = 0; d < D; ++d) {
@@ -760,18 +766,17 @@ class MpmSolver final : public Simulation {
       const size_t mi = static_cast<size_t>(it - gkeys_.begin()) * kNodes + local;
       if (gm_[mi] <= T(0) || gwall_[mi]) continue;
       T vg[D], vm[D], dvg[D];
-      MirrorChange c;
-      c.node = mi;
       for (int d = 0; d < D; ++d) {
         vg[d] = gv_[d][gh.idx];
         vm[d] = gv_[d][mi];
       }
       mpm::ghost_exchange<D>(vg, gm_[gh.idx], vm, gm_[mi], gh.axes, dvg, c.dv);
-      for (int d = 0; d < D; ++d) gv_[d][gh.idx] += dvg[d];  // ghosts are never mirrors: no later read sees it
-      mirror_dv_.push_back(c);
+      for (int d = 0; d < D; ++d) gv_[d][gh.idx] += dvg[d];  // ghosts are never mirrors: no exchange reads it
+      c.node = mi;
     }
     for (const MirrorChange& c : mirror_dv_)
-      for (int d = 0; d < D; ++d) gv_[d][c.node] += c.dv[d];
+      if (c.node != kNoMirror)
+        for (int d = 0; d < D; ++d) gv_[d][c.node] += c.dv[d];
   }
 
   // Whether a debris box may come within `margin` of the block's particles (a particle may sit up to one cell
@@ -1102,6 +1107,7 @@ class MpmSolver final : public Simulation {
     size_t node;
     T dv[D];
   };
+  static constexpr size_t kNoMirror = ~size_t(0);
   std::vector<MirrorChange> mirror_dv_;  // the mirrors' velocity changes, applied after every exchange
   std::vector<std::vector<CouplingNode>> coupling_;  // per thread: the nodes found in boxes this step
   std::vector<double> push_out_;  // per particle block and box: impulse and moment of pushed-out particles
