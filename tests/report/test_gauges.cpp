@@ -17,50 +17,20 @@
 #include <vector>
 
 #include "common/plot/figure.h"
+#include "tests/common/run_command.h"
 #include "report/gauges.h"
 #include "store/h5/run_file.h"
 
-extern char** environ;
 
 namespace {
 
 namespace fs = std::filesystem;
 constexpr double kPi = 3.14159265358979323846;
 
-std::string read_file(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
 
-struct Result {
-  int rc = -1;
-  std::string out, err;
-};
-
-Result run(const std::vector<std::string>& args, const fs::path& dir) {
-  const fs::path out = dir / "cmd.out", err = dir / "cmd.err";
-  posix_spawn_file_actions_t fa;
-  posix_spawn_file_actions_init(&fa);
-  posix_spawn_file_actions_addopen(&fa, 0, "/dev/null", O_RDONLY, 0);
-  posix_spawn_file_actions_addopen(&fa, 1, out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_addopen(&fa, 2, err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  std::vector<char*> argv;
-  for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-  argv.push_back(nullptr);
-  pid_t pid = -1;
-  Result r;
-  if (posix_spawn(&pid, argv[0], &fa, nullptr, argv.data(), environ) == 0) {
-    int status = 0;
-    waitpid(pid, &status, 0);
-    r.rc = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-  }
-  posix_spawn_file_actions_destroy(&fa);
-  r.out = read_file(out);
-  r.err = read_file(err);
-  return r;
-}
+using Result = flume::test::CommandResult;
+using flume::test::read_file;
+Result run(const std::vector<std::string>& args, const fs::path& dir) { return flume::test::run_command(args, dir); }
 
 // A record sampled at 100 Hz over [0, t_end].
 void write_gauge(flume::h5::RunFile& f, const std::string& name, double t_end, const std::function<double(double)>& eta) {
