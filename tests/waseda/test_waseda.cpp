@@ -88,6 +88,19 @@ TEST(Waseda, DISABLED_HeldReservoirStaysPut) {
   EXPECT_LT(o.rms_speed, limit);
 }
 
+// The largest deviation from 1, over the lattice's phase, of a gauge's B-spline weights summed over particle
+// columns sx apart and scaled by sx / dx: the relative error of a still-water reading on that lattice.
+double lattice_alias(double dx, double sx) {
+  double alias = 0;
+  for (int k = 0; k < 1000; ++k) {
+    double sum = 0;
+    for (long j = -long(2 * dx / sx) - 1; j <= long(2 * dx / sx) + 1; ++j)
+      sum += bspline_weight(((k + 0.5) / 1000 + j) * sx / dx);
+    alias = std::max(alias, std::fabs(sum * sx / dx - 1));
+  }
+  return alias;
+}
+
 // The seeding (solver/seeding.h) at dx = 0.04 m: the basin's 0.23 m of still water is 11.5 particle spacings
 // (0.02 m) and its 3.91 m 195.5, seeded as 12 x 196 particles stretched to fit. The particles carry the box's
 // volume between them, so every gauge over the basin reads the still-water level at t = 0 (with rho spacing^2
@@ -96,7 +109,7 @@ TEST(Waseda, DISABLED_HeldReservoirStaysPut) {
 // over its footprint, w_i the B-spline weight of particle i's distance from the gauge. The seeded columns, sx
 // apart, each hold the depth H (their particles' volumes sum to sx H), so the gauge reads
 // H (sx / dx) sum_j B((x_j - x_g) / dx): H exactly when dx / sx is whole, else off by the lattice sum's
-// deviation from dx / sx, at most its largest over the lattice's phase (computed below). Round-off adds the
+// deviation from dx / sx, at most its largest over the lattice's phase (lattice_alias). Round-off adds the
 // float positions, within delta = 2.4e-7 m of the lattice (half an ulp at 4 m < x < 8 m), which move the
 // weights' sum by at most delta / dx times B's total variation 1.5 (|B'| summed over columns sx apart, times
 // sx / dx), bounded by 2 H delta / dx; and the float volumes, 6e-8 relative.
@@ -113,13 +126,7 @@ TEST(Waseda, BasinGaugesReadStillWaterAtStart) {
       if (w.lo[0] <= xg - 1.5 * dx && xg + 1.5 * dx <= w.hi[0] && std::fabs(w.hi[1] - H) < 1e-12) box = &w;
     if (!box) continue;
     const double sx = (box->hi[0] - box->lo[0]) / std::max(1L, std::lround((box->hi[0] - box->lo[0]) / s));
-    double alias = 0;
-    for (int k = 0; k < 1000; ++k) {
-      double sum = 0;
-      for (long j = -long(2 * dx / sx) - 1; j <= long(2 * dx / sx) + 1; ++j)
-        sum += bspline_weight(((k + 0.5) / 1000 + j) * sx / dx);
-      alias = std::max(alias, std::fabs(sum * sx / dx - 1));
-    }
+    const double alias = lattice_alias(dx, sx);
     const double delta = std::ldexp(1.0, -22);  // half an ulp of a float in [4, 8)
     const double tol = H * (alias + 2 * delta / dx + 6e-8);
     const double eta = sim->record().gauges.at(g.name).at(0);
@@ -150,13 +157,7 @@ TEST(Waseda, GaugeBesideTheSymmetryPlaneReadsStillWaterAtStart) {
       box = &w;
   ASSERT_NE(box, nullptr);
   const double sx = (box->hi[0] - box->lo[0]) / std::max(1L, std::lround((box->hi[0] - box->lo[0]) / s));
-  double alias = 0;
-  for (int k = 0; k < 1000; ++k) {
-    double sum = 0;
-    for (long j = -long(2 * dx / sx) - 1; j <= long(2 * dx / sx) + 1; ++j)
-      sum += bspline_weight(((k + 0.5) / 1000 + j) * sx / dx);
-    alias = std::max(alias, std::fabs(sum * sx / dx - 1));
-  }
+  const double alias = lattice_alias(dx, sx);
   const double delta = std::ldexp(1.0, -23);  // half an ulp of a float in [1, 4): x = 1.85, y = 1.975
   const double tol = H * (alias + 2 * 2 * delta / dx + 6e-8);  // both axes' round-off
   const double eta = sim->record().gauges.at("WG1").at(0);
