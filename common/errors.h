@@ -1,5 +1,7 @@
 // Error types shared by every layer, and the process exit codes they map to.
 #pragma once
+#include <cstdio>
+#include <exception>
 #include <stdexcept>
 #include <string>
 
@@ -31,5 +33,21 @@ class InputError : public std::runtime_error {
   }
   std::string file_, field_, problem_;
 };
+
+// A command's main: runs `body` and turns what it throws into the exit code, an InputError printed with the
+// usage (kExitInvalidInput), anything else as "<cli>: internal error: ..." (kExitInternal).
+template <class Body>
+int guarded_main(const char* cli, const char* usage, Body&& body) {
+  try {
+    return body();
+  } catch (const InputError& e) {
+    std::fprintf(stderr, "%s\n", e.what());
+    std::fputs(usage, stderr);
+    return kExitInvalidInput;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "%s: internal error: %s\n", cli, e.what());
+    return kExitInternal;
+  }
+}
 
 }  // namespace flume

@@ -18,6 +18,7 @@
 
 #include "common/errors.h"
 #include "common/plot/figure.h"
+#include "solver/run_output.h"
 #include "store/h5/run_file.h"
 
 namespace flume::report {
@@ -174,29 +175,6 @@ void print_summary(const std::string& gauge, const Run& r) {
 
 }  // namespace
 
-GaugeSummary summarize_gauge(const std::vector<double>& time, const std::vector<double>& value, double threshold) {
-  GaugeSummary s;
-  bool have_first = false;
-  for (std::size_t i = 0; i < value.size() && i < time.size(); ++i) {
-    const double e = value[i];
-    if (!std::isfinite(e)) continue;
-    if (!have_first) {
-      s.first = e;
-      have_first = true;
-    }
-    if (!s.has_peak || e > s.peak) {
-      s.peak = e;
-      s.peak_time = time[i];
-      s.has_peak = true;
-    }
-    if (!s.arrived && threshold > 0 && e >= s.first + threshold) {
-      s.arrived = true;
-      s.arrival_time = time[i];
-    }
-  }
-  return s;
-}
-
 void sort_gauge_names(std::vector<std::string>& names) {
   // Runs of digits compare by value, the rest character by character; ties (WG01, WG1) by plain order.
   auto natural_less = [](const std::string& a, const std::string& b) {
@@ -234,7 +212,7 @@ int gauges_main(int argc, char** argv) {
       "  one panel per gauge (default: every gauge of the first run), one line per run (LABEL: default the\n"
       "  folder's name); prints per gauge and run the peak, its time and the arrival (the first time the record\n"
       "  rises 5 mm above its first reading), over t <= --t-max when given\n";
-  try {
+  return guarded_main(kCli, usage, [&]() -> int {
     std::vector<std::pair<std::string, std::string>> run_args;  // dir, label
     std::string out, title;
     std::vector<std::string> wanted;
@@ -314,14 +292,7 @@ int gauges_main(int argc, char** argv) {
     fig.save(out);
     std::printf("wrote %s\n", out.c_str());
     return kExitOk;
-  } catch (const InputError& e) {
-    std::fprintf(stderr, "%s\n", e.what());
-    std::fputs(usage, stderr);
-    return kExitInvalidInput;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "%s: internal error: %s\n", kCli, e.what());
-    return kExitInternal;
-  }
+  });
 }
 
 }  // namespace flume::report

@@ -212,7 +212,7 @@ int debris_paths_main(int argc, char** argv) {
       "usage: flume debris-paths RUN_DIR [--set path=value ...] [RUN_DIR [--set ...] ...] --out FILE.svg\n"
       "  --set (after a RUN_DIR, for that run): for runs older than run.json's scene_json, the overrides the run\n"
       "  was started with\n";
-  try {
+  return guarded_main(kCli, usage, [&]() -> int {
     std::vector<std::string> dirs;
     std::string out;
     std::vector<std::vector<Override>> sets;  // per run folder
@@ -247,14 +247,7 @@ int debris_paths_main(int argc, char** argv) {
     fig.save(out);
     std::printf("wrote %s\n", out.c_str());
     return kExitOk;
-  } catch (const InputError& e) {
-    std::fprintf(stderr, "%s\n", e.what());
-    std::fputs(usage, stderr);
-    return kExitInvalidInput;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "%s: internal error: %s\n", kCli, e.what());
-    return kExitInternal;
-  }
+  });
 }
 
 }  // namespace flume::report

@@ -18,33 +18,39 @@ std::string status_name(RunStatus s) {
   }
 }
 
+GaugeSummary summarize_gauge(const std::vector<double>& time, const std::vector<double>& value, double threshold) {
+  GaugeSummary s;
+  bool have_first = false;
+  for (std::size_t i = 0; i < value.size() && i < time.size(); ++i) {
+    const double e = value[i];
+    if (!std::isfinite(e)) continue;
+    if (!have_first) {
+      s.first = e;
+      have_first = true;
+    }
+    if (!s.has_peak || e > s.peak) {
+      s.peak = e;
+      s.peak_time = time[i];
+      s.has_peak = true;
+    }
+    if (!s.arrived && e >= s.first + threshold) {
+      s.arrived = true;
+      s.arrival_time = time[i];
+    }
+  }
+  return s;
+}
+
 std::map<std::string, double> compute_metrics(const Scene& scene, const Record& record, double arrival_threshold_m) {
   std::map<std::string, double> m;
   for (const auto& [name, ts] : record.gauges) {
-    double peak = -1e300, peak_t = 0, arrival = -1;
-    // Arrival: the first rise of the threshold above the gauge's first reading (0 where it starts in still
-    // water; the ground's height above the datum where it starts dry, as on an apron).
-    double start = 0;
-    for (size_t i = 0; i < ts.size(); ++i)
-      if (std::isfinite(ts.at(i))) {
-        start = ts.at(i);
-        break;
-      }
-    for (size_t i = 0; i < ts.size(); ++i) {
-      const double e = ts.at(i);
-      if (!std::isfinite(e)) continue;
-      if (e > peak) {
-        peak = e;
-        peak_t = ts.time[i];
-      }
-      if (arrival < 0 && e >= start + arrival_threshold_m) arrival = ts.time[i];
+    const GaugeSummary g = summarize_gauge(ts.time, ts.values, arrival_threshold_m);
+    if (g.has_peak) {
+      m[name + ".peak_m"] = g.peak;
+      m[name + ".peak_time_s"] = g.peak_time;
     }
-    if (peak > -1e300) {
-      m[name + ".peak_m"] = peak;
-      m[name + ".peak_time_s"] = peak_t;
-    }
-    m[name + ".arrived"] = arrival >= 0 ? 1.0 : 0.0;
-    if (arrival >= 0) m[name + ".arrival_s"] = arrival;
+    m[name + ".arrived"] = g.arrived ? 1.0 : 0.0;
+    if (g.arrived) m[name + ".arrival_s"] = g.arrival_time;
   }
   for (const auto& [name, ts] : record.loads) {
     double peak = 0, peak_x = 0, impulse = 0;

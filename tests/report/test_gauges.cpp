@@ -19,6 +19,7 @@
 #include "common/plot/figure.h"
 #include "tests/common/run_command.h"
 #include "report/gauges.h"
+#include "solver/run_output.h"
 #include "store/h5/run_file.h"
 
 
@@ -185,14 +186,14 @@ TEST_F(GaugesCli, InputErrorsExitTwoNamingTheFileAndGauge) {
 
 TEST(GaugeSummary, PeakAndArrivalSkipNonFiniteSamples) {
   const double nan = std::nan("");
-  const auto s = flume::report::summarize_gauge({0, 1, 2, 3, 4}, {nan, 0.25, 0.252, nan, 0.3}, 0.005);
+  const auto s = flume::summarize_gauge({0, 1, 2, 3, 4}, {nan, 0.25, 0.252, nan, 0.3}, 0.005);
   EXPECT_TRUE(s.has_peak);
   EXPECT_DOUBLE_EQ(s.first, 0.25);
   EXPECT_DOUBLE_EQ(s.peak, 0.3);
   EXPECT_DOUBLE_EQ(s.peak_time, 4);
   EXPECT_TRUE(s.arrived);
   EXPECT_DOUBLE_EQ(s.arrival_time, 4);
-  EXPECT_FALSE(flume::report::summarize_gauge({0, 1}, {nan, nan}, 0.005).has_peak);
+  EXPECT_FALSE(flume::summarize_gauge({0, 1}, {nan, nan}, 0.005).has_peak);
 }
 
 TEST(GaugeNames, NaturalOrder) {
