@@ -78,10 +78,9 @@ FLUME_HD int tait_dyadic_gamma(T gamma, int& halvings) {
 }
 // P = J^gamma - 1, R = J^gamma - 1 - gamma e, Q = J^gamma (the relatively exact denominator that 1 + P would not
 // be when the water is compressed far, e -> -1, P -> -1). False, and nothing set, on the libm path.
+// m and k are tait_dyadic_gamma's, found once per law (TaitLaw), not per particle.
 template <typename T>
-FLUME_HD bool tait_powers(T e, T gamma, T& P, T& R, T& Q) {
-  int k = 0;
-  const int m = tait_dyadic_gamma(gamma, k);
+FLUME_HD bool tait_powers(T e, int m, int k, T& P, T& R, T& Q) {
   if (m == 0) return false;
   // x_j = e / prod_{i <= j} (1 + J^(1/2^i)): the roots of the rounded J are good to an epsilon next to 1, so the
   // product is relatively exact and one division serves all k halvings.
@@ -124,27 +123,80 @@ FLUME_HD bool tait_powers(T e, T gamma, T& P, T& R, T& Q) {
   return true;
 }
 
-// Tait/Murnaghan pressure p = K/gamma (J^-gamma - 1) = -K/gamma P/Q; on the libm path K/gamma
-// expm1(-gamma log1p(e)).
+// The Tait/Murnaghan law of one fluid, set up once per solver: the particle loops evaluate it per particle and
+// per step. Water stays within |e| ~ 1e-2 of rest (a 0.5 m head is e = -2.6e-3 at K = 2e6 Pa), where both the
+// pressure and the stored energy are their Taylor series in e to round-off with a handful of terms: a
+// polynomial that vectorises, with no division. Beyond `cut` (set so that the first term left out is below a
+// quarter of an epsilon of the leading one) the exact forms below take over: gamma = m / 2^k by halvings and
+// binary powering (m and k found here, once), else expm1/log1p.
+template <typename T>
+struct TaitLaw {
+  static constexpr int kTerms = sizeof(T) >= 8 ? 10 : 5;
+  T K = 0, gamma = 0;
+  int m = 0, k = 0;  // gamma = m / 2^k; m = 0: the libm path
+  // p = K e sum_{i < kTerms} cp[i] e^i and W = K e^2 sum_{i < kTerms} cw[i] e^i, for |e| <= cut.
+  T cp[kTerms] = {}, cw[kTerms] = {}, cut = 0;
+  TaitLaw() = default;
+  FLUME_HD TaitLaw(T bulk_modulus, T exponent) : K(bulk_modulus), gamma(exponent) {
+    m = tait_dyadic_gamma(gamma, k);
+    // (1 + e)^-gamma - 1 = sum_k binom(-gamma, k) e^k, so p/K has c_1 = -1, c_{k+1} = -c_k (gamma + k)/(k + 1);
+    // W/K = sum_{k >= 2} binom(1 - gamma, k) e^k / (gamma (gamma - 1)): d_2 = 1/2, d_{k+1} = -d_k (gamma + k - 1)/(k + 1).
+    const double g = double(gamma);
+    double c = -1, d = 0.5;
+    for (int i = 0; i < kTerms; ++i) {
+      cp[i] = T(c);
+      cw[i] = T(d);
+      c = -c * (g + i + 1) / (i + 2);
+      d = -d * (g + i + 1) / (i + 3);
+    }
+    // c and d are now the first terms left out, of e^kTerms relative to the leading ones.
+    const double eps = sizeof(T) >= 8 ? 2.220446049250313e-16 : 1.1920929e-07;
+    const double worst = std::fmax(std::fabs(c), std::fabs(d) / 0.5);
+    cut = T(std::pow(0.25 * eps / worst, 1.0 / kTerms));
+  }
+
+  FLUME_HD bool in_series(T e) const { return std::fabs(e) <= cut; }
+  FLUME_HD T pressure_series(T e) const {
+    T s = cp[kTerms - 1];
+    for (int i = kTerms - 2; i >= 0; --i) s = s * e + cp[i];
+    return K * e * s;
+  }
+  FLUME_HD T energy_series(T e) const {
+    T s = cw[kTerms - 1];
+    for (int i = kTerms - 2; i >= 0; --i) s = s * e + cw[i];
+    return K * e * e * s;
+  }
+
+  // p = K/gamma (J^-gamma - 1) = -K/gamma P/Q; on the libm path K/gamma expm1(-gamma log1p(e)).
+  FLUME_HD T pressure_exact(T e) const {
+    T P, R, Q;
+    if (tait_powers(e, m, k, P, R, Q)) return -K / gamma * P / Q;
+    return K / gamma * std::expm1(-gamma * std::log1p(e));
+  }
+  FLUME_HD T pressure(T e) const { return in_series(e) ? pressure_series(e) : pressure_exact(e); }
+
+  // Stored energy per unit reference volume whose derivative with respect to J is -p:
+  // W = K/gamma [(J^(1-gamma) - 1)/(gamma - 1) + J - 1]; gamma = 1 is the limit K (J - 1 - ln J). With
+  // J^(1-gamma) - 1 = (e - P)/J^gamma the bracket is ((gamma - 1) e P - R) / ((gamma - 1) J^gamma), whose leading
+  // terms gamma (gamma - 1) e^2 and gamma (gamma - 1) e^2 / 2 cancel only by half. Used by the energy audit that
+  // flags an unstable run.
+  FLUME_HD T energy_exact(T e) const {
+    if (std::fabs(gamma - T(1)) < T(1e-6)) return K * (e - std::log1p(e));
+    T P, R, Q;
+    if (tait_powers(e, m, k, P, R, Q)) return K / (gamma * (gamma - T(1))) * ((gamma - T(1)) * e * P - R) / Q;
+    return K / gamma * (std::expm1((T(1) - gamma) * std::log1p(e)) / (gamma - T(1)) + e);
+  }
+  FLUME_HD T energy_density(T e) const { return in_series(e) ? energy_series(e) : energy_exact(e); }
+};
+
+// One-off forms (tests, diagnostics): the law built for a single call.
 template <typename T>
 FLUME_HD T tait_pressure(T e, T bulk_modulus, T gamma) {
-  T P, R, Q;
-  if (tait_powers(e, gamma, P, R, Q)) return -bulk_modulus / gamma * P / Q;
-  return bulk_modulus / gamma * std::expm1(-gamma * std::log1p(e));
+  return TaitLaw<T>(bulk_modulus, gamma).pressure(e);
 }
-
-// Stored energy per unit reference volume whose derivative with respect to J is -p:
-// W = K/gamma [(J^(1-gamma) - 1)/(gamma - 1) + J - 1]; gamma = 1 is the limit K (J - 1 - ln J). With J^(1-gamma) - 1
-// = (e - P)/J^gamma the bracket is ((gamma - 1) e P - R) / ((gamma - 1) J^gamma), whose leading terms
-// gamma (gamma - 1) e^2 and gamma (gamma - 1) e^2 / 2 cancel only by half. Used by the energy audit that flags an
-// unstable run.
 template <typename T>
 FLUME_HD T tait_energy_density(T e, T bulk_modulus, T gamma) {
-  if (std::fabs(gamma - T(1)) < T(1e-6)) return bulk_modulus * (e - std::log1p(e));
-  T P, R, Q;
-  if (tait_powers(e, gamma, P, R, Q))
-    return bulk_modulus / (gamma * (gamma - T(1))) * ((gamma - T(1)) * e * P - R) / Q;
-  return bulk_modulus / gamma * (std::expm1((T(1) - gamma) * std::log1p(e)) / (gamma - T(1)) + e);
+  return TaitLaw<T>(bulk_modulus, gamma).energy_density(e);
 }
 
 // Wave speed of the linearised fluid, c = sqrt(K / rho), which sets the explicit step.
@@ -156,8 +208,7 @@ FLUME_HD T sound_speed(T bulk_modulus, T density) {
 // Cauchy stress of the fluid: -p I + 2 mu dev(sym(grad v)), with grad v taken from the APIC matrix C
 // (for quadratic MLS-MPM, C is the velocity gradient estimate); e = J - 1. Row-major D x D.
 template <int D, typename T>
-FLUME_HD void fluid_stress(T e, const T* C, T bulk_modulus, T gamma, T viscosity, T* sigma) {
-  const T p = tait_pressure(e, bulk_modulus, gamma);
+FLUME_HD void viscous_stress_with_pressure(T p, const T* C, T viscosity, T* sigma) {
   T trace = 0;
   for (int a = 0; a < D; ++a) trace += C[a * D + a];
   for (int a = 0; a < D; ++a)
@@ -165,6 +216,10 @@ FLUME_HD void fluid_stress(T e, const T* C, T bulk_modulus, T gamma, T viscosity
       const T sym = T(0.5) * (C[a * D + b] + C[b * D + a]);
       sigma[a * D + b] = T(2) * viscosity * (sym - (a == b ? trace / T(D) : T(0))) - (a == b ? p : T(0));
     }
+}
+template <int D, typename T>
+FLUME_HD void fluid_stress(T e, const T* C, const TaitLaw<T>& law, T viscosity, T* sigma) {
+  viscous_stress_with_pressure<D>(law.pressure(e), C, viscosity, sigma);
 }
 
 // det(I + dt C) - 1, the particle's volumetric strain over one step, summed from the invariants of dt C so

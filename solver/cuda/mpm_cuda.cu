@@ -132,6 +132,8 @@ struct View {
   size_t nodes;
   // constants
   T dx, inv_dx, rho, K, gamma, mu, psi, fill_tol, inv_cell_volume;
+  mpm::TaitLaw<T> law;
+  mpm::TaitLaw<double> law_d;  // the energy audit's, in double
   double rho_d;
   T grid_lo[D], gravity[D], strain_slope[D];
   double dx_d, grid_lo_d[D], domain_lo[D], domain_hi[D];
@@ -227,7 +229,7 @@ struct P2G {
     T Cp[D * D], sigma[D * D], A[D * D];
     for (int k = 0; k < D * D; ++k) Cp[k] = s.C[k][i];
     const T e = s.e[i];
-    mpm::fluid_stress<D>(e, Cp, s.K, s.gamma, s.mu, sigma);
+    mpm::fluid_stress<D>(e, Cp, s.law, s.mu, sigma);
     for (int k = 0; k < D * D; ++k) A[k] = stress_scale * V * (T(1) + e) * sigma[k] + m * Cp[k];
     // Momentum carried to node (base + off): m v + A (off - f) dx, split into a constant and a linear part.
     T mom0[D], xp[D];
@@ -431,8 +433,7 @@ struct G2P {
     if (have_grid) {
       const T corrected = mpm::fill_correction(e, Fg / wsum, fill_rate, s.fill_tol);
       if (corrected != e) {  // what the constraint supplies (what it removes is dissipation): MpmSolver::g2p
-        work = double(s.vol[i]) * (mpm::tait_energy_density(double(corrected), double(s.K), double(s.gamma)) -
-                                   mpm::tait_energy_density(double(e), double(s.K), double(s.gamma)));
+        work = double(s.vol[i]) * (s.law_d.energy_density(double(corrected)) - s.law_d.energy_density(double(e)));
         work = work > 0.0 ? work : 0.0;
       }
       e = corrected;
@@ -503,7 +504,7 @@ struct AuditParticle {
     const double V = s.vol[i], mp = s.rho_d * V;
     r.ke = 0.5 * mp * v2;
     r.pe = -mp * gx;
-    r.el = V * mpm::tait_energy_density(double(e), double(s.K), double(s.gamma));
+    r.el = V * s.law_d.energy_density(double(e));
     return r;
   }
 };
@@ -812,6 +813,8 @@ class MpmCuda final : public Simulation {
     s.rho_d = rho_;
     s.K = K_;
     s.gamma = gamma_;
+    s.law = mpm::TaitLaw<T>(K_, gamma_);
+    s.law_d = mpm::TaitLaw<double>(double(K_), double(gamma_));
     s.mu = mu_;
     s.psi = psi_;
     s.fill_tol = T(mpm::kFillTolerance);
