@@ -921,13 +921,30 @@ class MpmSolver final : public Simulation {
         t[D + 2] = free;
         for (int c = D + 3; c < kLanes; ++c) t[c] = T(0);
       }
-      for (uint32_t i = pstart_[p]; i < pstart_[p + 1]; ++i) {
+      // The stencil weights of a batch of particles first, in a loop of their own; then the gather and update
+      // one particle at a time.
+      for (uint32_t b0 = pstart_[p]; b0 < pstart_[p + 1]; b0 += kBatch) {
+        const int nb = static_cast<int>(std::min<uint32_t>(kBatch, pstart_[p + 1] - b0));
+        alignas(64) T bw[D][3][kBatch], bf[D][kBatch];
+        alignas(64) int brel[D][kBatch];
+        for (int d = 0; d < D; ++d) {
+          const T* xd = x_[d].data() + b0;
+          for (int j = 0; j < nb; ++j) {
+            T fj, w[3];
+            brel[d][j] = mpm::stencil_base((xd[j] - lo_grid[d]) * inv_dx, fj) - origin[d];
+            mpm::bspline_weights(fj, w);
+            bf[d][j] = fj;
+            for (int c = 0; c < 3; ++c) bw[d][c][j] = w[c];
+          }
+        }
+      for (int j = 0; j < nb; ++j) {
+        const uint32_t i = b0 + j;
         T w[D][3], f[D];
         int rel[D];
         for (int d = 0; d < D; ++d) {
-          const T xg = (x_[d][i] - lo_grid[d]) * inv_dx;
-          rel[d] = mpm::stencil_base(xg, f[d]) - origin[d];
-          mpm::bspline_weights(f[d], w[d]);
+          rel[d] = brel[d][j];
+          f[d] = bf[d][j];
+          for (int c = 0; c < 3; ++c) w[d][c] = bw[d][c][j];
         }
         // Separable sums over the stencil: S = sum w n, and M[b] = sum w i_b n (i_b the node's offset 0, 1, 2
         // on axis b), n the node's lanes. Then v = S[0..D), the APIC matrix C_ab = sum w v_a (i_b - f_b) dx
@@ -1018,6 +1035,7 @@ class MpmSolver final : public Simulation {
         ke += 0.5 * mp * v2;
         pe -= mp * gx;
         el += V * double(law.energy_density(e));  // in T: the audit needs no more
+      }
       }
     }
     if (debris_)  // the particles' lost momentum goes to the boxes, summed in block order (thread-independent)
