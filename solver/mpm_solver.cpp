@@ -515,8 +515,10 @@ class MpmSolver final : public Simulation {
       unpack_key<D>(pkeys_[p], blk);
       for (int d = 0; d < D; ++d) origin[d] = blk[d] * kBlock - 1;
       // Two passes per batch of particles. The first computes each particle's weights and what its nodes
-      // receive, in plain arrays across the batch so that the compiler vectorises it across particles (the
-      // scalar set-up was three fifths of the scatter); the second builds the lane vectors and scatters.
+      // receive into plain arrays across the batch; the second builds the lane vectors and scatters. The
+      // scalar set-up (three fifths of P2G in perf) then runs back to back for 32 particles instead of
+      // queueing behind each one's 27-node scatter: +11 % on a CPU step in double (1 thread). GCC 12
+      // vectorises the pressure loop across particles, not yet the set-up loop.
       for (uint32_t b0 = pstart_[p]; b0 < pstart_[p + 1]; b0 += kBatch) {
         const int nb = static_cast<int>(std::min<uint32_t>(kBatch, pstart_[p + 1] - b0));
         alignas(64) T bw[D][3][kBatch], bat0[kChannels][kBatch], bslope[D][D][kBatch], bp[kBatch];
@@ -884,11 +886,13 @@ class MpmSolver final : public Simulation {
     const mpm::TaitLaw<T> law = law_;
     const mpm::TaitLaw<double> law_d = law_d_;
     const T psi = psi_, fill_tol = fill_tolerance_, inv_dx = inv_dx_;
-    T slope_h[D], lo_grid[D];
+    T slope_h[D], lo_grid[D], grav[D];
     for (int d = 0; d < D; ++d) {
       slope_h[d] = strain_slope_[d];
       lo_grid[d] = T(grid_lo_[d]);
+      grav[d] = gravity_[d];
     }
+    const double rho = rho_;
     const long nblocks = static_cast<long>(pkeys_.size());
     double vmax2 = 0, ke = 0, pe = 0, el = 0, fill_work = 0;
     long bad = std::numeric_limits<long>::max();
@@ -905,6 +909,7 @@ class MpmSolver final : public Simulation {
 #pragma omp parallel for schedule(dynamic, 4) reduction(max : vmax2) reduction(+ : ke, pe, el, fill_work) reduction(|| : resort)
     for (long p = 0; p < nblocks; ++p) {
       const bool near_debris = debris_ && block_near_debris(pkeys_[p], 2 * dx_);
+      T vmax2_b = 0, ke_b = 0, pe_b = 0, el_b = 0;
       // Gather the tile around this block: per node the velocity, then (free nodes only) strain, fill and weight.
       alignas(64) T tg[kTileNodes * kLanes];
       int blk[D], origin[D];
@@ -1003,8 +1008,8 @@ class MpmSolver final : public Simulation {
           e = corrected;
         }
         e_[i] = e;
-        double v2 = 0, gx = 0;
-        bool finite = std::isfinite(double(e)) && e > T(-1);
+        T v2 = 0, gx = 0;
+        bool finite = std::isfinite(e) && e > T(-1);
         bool inside = true;
         for (int d = 0; d < D; ++d) {
           v_[d][i] = vn[d];
@@ -1013,10 +1018,10 @@ class MpmSolver final : public Simulation {
         if (near_debris) push_out_of_debris(i, &push_out_[static_cast<size_t>(p) * nbodies * 6]);
         for (int d = 0; d < D; ++d) {
           const T xn = x_[d][i], vd = v_[d][i];
-          finite &= std::isfinite(double(xn)) && std::isfinite(double(vd));
+          finite &= std::isfinite(xn) && std::isfinite(vd);
           inside &= xn >= T(lo_ok[d]) && xn <= T(hi_ok[d]);
-          v2 += double(vd) * vd;
-          gx += double(gravity_[d]) * xn;
+          v2 += vd * vd;
+          gx += grav[d] * xn;
           // Drifted out of the tile margin: re-sort before the next scatter.
           const int nr = mpm::stencil_base((xn - lo_grid[d]) * inv_dx, f[d]) - origin[d];
           resort |= nr < 0 || nr > kBlock + 1;
@@ -1030,13 +1035,19 @@ class MpmSolver final : public Simulation {
           }
           continue;
         }
-        vmax2 = std::max(vmax2, v2);
-        const double V = vol_[i], mp = rho_ * V;
-        ke += 0.5 * mp * v2;
-        pe -= mp * gx;
-        el += V * double(law.energy_density(e));  // in T: the audit needs no more
+        // The audit's sums, per block in T (the audit's slack is 1 % of the energy scale; a float block sum is
+        // good to 1e-6 of it) and then in double across blocks.
+        const T V = vol_[i];
+        vmax2_b = std::max(vmax2_b, v2);
+        ke_b += V * v2;
+        pe_b -= V * gx;
+        el_b += V * law.energy_density(e);
       }
       }
+      vmax2 = std::max(vmax2, double(vmax2_b));
+      ke += 0.5 * rho * double(ke_b);
+      pe += rho * double(pe_b);
+      el += double(el_b);
     }
     if (debris_)  // the particles' lost momentum goes to the boxes, summed in block order (thread-independent)
       for (int b = 0; b < nbodies; ++b) {
