@@ -457,6 +457,8 @@ class MpmSolver final : public Simulation {
     size_t idx = 0;       // the ghost node
     int offset[D] = {};   // the reflection's offset in nodes, then (after the walls) the mirror node
     unsigned axes = 0;    // the normal axes: kept; the others are exchanged with the mirror
+    T vpre[D] = {};       // the ghost's velocity from the particles alone (mpm::ghost_exchange)
+    int wall = -1;        // the scene wall whose load takes the image's push (-1: the domain box)
   };
   struct Wall {
     bool box = true;
@@ -677,7 +679,8 @@ class MpmSolver final : public Simulation {
           for (int d = 0; d < D; ++d) v[d] = acc[k][1 + d] / m + dt * gravity_[d];
           uint8_t on_wall = 0;
           // Ghost nodes (mpm::ghost_half_space): the reflection's offset.
-          Ghost ghost;
+          Ghost ghost;  // its image reflects the particles' momentum only, not gravity's (mpm::ghost_exchange)
+          for (int d = 0; d < D; ++d) ghost.vpre[d] = acc[k][1 + d] / m;
           bool ambiguous = false;
           // Scene boundaries reaching this block.
           double xn[D];
@@ -695,10 +698,12 @@ class MpmSolver final : public Simulation {
             if (w.bc == mpm::Bc::kSticky) {
               ambiguous = true;
             } else {
+              const unsigned axes_before = ghost.axes;
               if (w.box)
                 mpm::ghost_box<D>(xn, w.ad, w.bd, dx_, ghost.offset, ghost.axes, ambiguous);
               else
                 mpm::ghost_half_space<D>(xn, w.ad, w.bd, dx_, ghost.offset, ghost.axes, ambiguous);
+              if (ghost.axes != axes_before) ghost.wall = static_cast<int>(g_bnd_[q]);
             }
           }
           if (domain_bc_ == mpm::Bc::kSticky) {
@@ -800,13 +805,22 @@ class MpmSolver final : public Simulation {
         vg[d] = gv_[d][gh.idx];
         vm[d] = gv_[d][mi];
       }
-      mpm::ghost_exchange<D>(vg, gm_[gh.idx], vm, gm_[mi], gh.axes, dvg, c.dv);
+      mpm::ghost_exchange<D>(vg, gh.vpre, gm_[gh.idx], vm, gm_[mi], gh.axes, dvg, c.dv);
       for (int d = 0; d < D; ++d) gv_[d][gh.idx] += dvg[d];  // ghosts are never mirrors: no exchange reads it
       c.node = mi;
+      c.mass = gm_[mi];
     }
-    for (const MirrorChange& c : mirror_dv_)
-      if (c.node != kNoMirror)
-        for (int d = 0; d < D; ++d) gv_[d][c.node] += c.dv[d];
+    // The mirrors' changes in ghost order; the normal part of each (the image's push) is the wall's load.
+    for (size_t q = 0; q < mirror_dv_.size(); ++q) {
+      const MirrorChange& c = mirror_dv_[q];
+      if (c.node == kNoMirror) continue;
+      const Ghost& gh = all_ghosts_[q];
+      for (int d = 0; d < D; ++d) {
+        gv_[d][c.node] += c.dv[d];
+        if (gh.wall >= 0 && (gh.axes & (1u << d)))
+          load_impulse_[static_cast<size_t>(gh.wall) * D + d] -= double(c.mass) * double(c.dv[d]);
+      }
+    }
   }
 
   // Whether a debris box may come within `margin` of the block's particles (a particle may sit up to one cell
@@ -1174,6 +1188,7 @@ class MpmSolver final : public Simulation {
   struct MirrorChange {
     size_t node;
     T dv[D];
+    T mass;  // the mirror node's, for the wall load
   };
   static constexpr size_t kNoMirror = ~size_t(0);
   std::vector<MirrorChange> mirror_dv_;  // the mirrors' velocity changes, applied after every exchange

@@ -128,7 +128,8 @@ struct View {
   uint8_t* gwall;
   int64_t* ghost_mirror;  // per node: its reflection's grid index (mpm::ghost_half_space), or -1
   uint8_t* ghost_axes;    // per node: the normal axes the reflection keeps
-  T* ghost_dv;            // D x nodes: a ghost's mirror's velocity change (mpm::ghost_exchange)
+  T* ghost_dv;            // D x nodes: a ghost's velocity before the walls, then its mirror's velocity change
+  int32_t* ghost_wall;    // per node: the scene wall whose load takes the image's push, or -1
   size_t nodes;
   // constants
   T dx, inv_dx, rho, K, gamma, mu, psi, fill_tol, inv_cell_volume;
@@ -289,6 +290,9 @@ struct GridUpdate {
     int mirror[D] = {};
     unsigned axes = 0;
     bool ambiguous = false;
+    int ghost_wall = -1;
+    // The particles' momentum alone, before gravity and the walls: what a ghost's image reflects (mpm::ghost_exchange).
+    for (int d = 0; d < D; ++d) s.ghost_dv[d * s.nodes + idx] = s.grid[(1 + d) * s.nodes + idx] / m;
     for (int k = 0; k < s.n_walls; ++k) {
       const Wall<D, T>& w = s.walls[k];
       double n[2 * D][D];
@@ -303,10 +307,12 @@ struct GridUpdate {
       if (static_cast<mpm::Bc>(w.bc) == mpm::Bc::kSticky) {
         ambiguous = true;
       } else {
+        const unsigned axes_before = axes;
         if (w.box)
           mpm::ghost_box<D>(xn, w.a, w.b, s.dx_d, mirror, axes, ambiguous);
         else
           mpm::ghost_half_space<D>(xn, w.a, w.b, s.dx_d, mirror, axes, ambiguous);
+        if (axes != axes_before) ghost_wall = k;
       }
     }
     if (static_cast<mpm::Bc>(s.domain_bc) == mpm::Bc::kSticky) {
@@ -321,6 +327,7 @@ struct GridUpdate {
       for (int d = 0; d < D; ++d) mirror[d] += node[d];
       s.ghost_mirror[idx] = s.grid_index(mirror);
       s.ghost_axes[idx] = static_cast<uint8_t>(axes);
+      s.ghost_wall[idx] = ghost_wall;
     }
     for (int d = 0; d < D; ++d) {
       T n[D] = {};
@@ -357,12 +364,13 @@ struct GhostExchange {
   FLUME_HD void operator()(size_t idx) const {
     int64_t mi;
     if (!ghost_pair(s, idx, mi)) return;
-    T vg[D], vm[D], dvg[D], dvm[D];
+    T vg[D], vpre[D], vm[D], dvg[D], dvm[D];
     for (int d = 0; d < D; ++d) {
       vg[d] = s.grid[(1 + d) * s.nodes + idx];
+      vpre[d] = s.ghost_dv[d * s.nodes + idx];
       vm[d] = s.grid[(1 + d) * s.nodes + mi];
     }
-    mpm::ghost_exchange<D>(vg, s.grid[idx], vm, s.grid[mi], s.ghost_axes[idx], dvg, dvm);
+    mpm::ghost_exchange<D>(vg, vpre, s.grid[idx], vm, s.grid[mi], s.ghost_axes[idx], dvg, dvm);
     for (int d = 0; d < D; ++d) {
       s.grid[(1 + d) * s.nodes + idx] = vg[d] + dvg[d];
       s.ghost_dv[d * s.nodes + idx] = dvm[d];
@@ -375,7 +383,13 @@ struct GhostMirrorUpdate {
   FLUME_HD void operator()(size_t idx) const {
     int64_t mi;
     if (!ghost_pair(s, idx, mi)) return;
-    for (int d = 0; d < D; ++d) atomic_add(&s.grid[(1 + d) * s.nodes + mi], s.ghost_dv[d * s.nodes + idx]);
+    const int wall = s.ghost_wall[idx];
+    for (int d = 0; d < D; ++d) {
+      atomic_add(&s.grid[(1 + d) * s.nodes + mi], s.ghost_dv[d * s.nodes + idx]);
+      // The normal part (the image's push) is the wall's load. The mirror's mass is read before any change.
+      if (s.impulse && wall >= 0 && (s.ghost_axes[idx] & (1u << d)))
+        atomic_add(&s.impulse[wall * D + d], -double(s.grid[mi]) * double(s.ghost_dv[d * s.nodes + idx]));
+    }
   }
 };
 
@@ -628,6 +642,7 @@ class MpmCuda final : public Simulation {
   size_t grid_bytes() const override {
     return grid_.capacity() * sizeof(T) + gwall_.capacity() + ghost_axes_.capacity() +
            ghost_mirror_.capacity() * sizeof(int64_t) + ghost_dv_.capacity() * sizeof(T) +
+           ghost_wall_.capacity() * sizeof(int32_t) +
            (gkeys_.capacity() + pkeys_.capacity()) * sizeof(uint64_t) + p_nbr_.capacity() * sizeof(int32_t);
   }
   size_t active_blocks() const override { return gkeys_.size(); }
@@ -806,6 +821,7 @@ class MpmCuda final : public Simulation {
     s.ghost_mirror = raw(ghost_mirror_);
     s.ghost_axes = raw(ghost_axes_);
     s.ghost_dv = raw(ghost_dv_);
+    s.ghost_wall = raw(ghost_wall_);
     s.nodes = gkeys_.size() * kNodes;
     s.dx = T(dx_);
     s.inv_dx = inv_dx_;
@@ -868,6 +884,7 @@ class MpmCuda final : public Simulation {
     ghost_mirror_.resize(nodes);
     ghost_axes_.resize(nodes);
     ghost_dv_.resize(D * nodes);
+    ghost_wall_.resize(nodes);
     needs_sort_ = false;
   }
 
@@ -966,6 +983,7 @@ class MpmCuda final : public Simulation {
   thr::device_vector<uint8_t> gwall_, ghost_axes_;
   thr::device_vector<int64_t> ghost_mirror_;
   thr::device_vector<T> ghost_dv_;  // D x nodes
+  thr::device_vector<int32_t> ghost_wall_;
   thr::device_vector<Wall<D, T>> walls_;
   thr::device_vector<double> impulse_;
   thr::device_vector<double> fill_work_;

@@ -102,30 +102,61 @@ TEST(Tait, EnergyDerivativeIsMinusPressure) {
     }
 }
 
-// The free-slip mirror's exchange between a ghost node and its mirror node: tangential momentum conserved, the
-// tangential velocities equal afterwards, the normal axis untouched, kinetic energy never raised.
-TEST(GhostMirror, ExchangeConservesMomentumAndCannotAddEnergy) {
+// The free-slip mirror's exchange between a ghost node and its mirror node. Tangential axes: momentum conserved,
+// the velocities equal afterwards, kinetic energy never raised. Normal axis: the ghost keeps what the wall gave
+// it, and the mirror takes the ghost's mass and its reflected pre-wall momentum, the image's push.
+TEST(GhostMirror, ExchangeConservesTangentialMomentumAndCannotAddEnergy) {
   using flume::mpm::ghost_exchange;
   const double mg = 0.03, mm = 1.2;
-  const double vg[3] = {0.9, -0.4, 0.0}, vm[3] = {0.2, 0.5, 0.3};
+  const double vg[3] = {0.9, -0.4, 0.0}, vpre[3] = {0.9, -0.4, -0.2}, vm[3] = {0.2, 0.5, 0.3};
   double dvg[3], dvm[3];
-  ghost_exchange<3>(vg, mg, vm, mm, 1u << 2, dvg, dvm);  // normal along z
-  for (int a = 0; a < 3; ++a) EXPECT_NEAR(mg * dvg[a] + mm * dvm[a], 0.0, 1e-16) << a;
-  EXPECT_EQ(dvg[2], 0.0);
-  EXPECT_EQ(dvm[2], 0.0);
+  ghost_exchange<3>(vg, vpre, mg, vm, mm, 1u << 2, dvg, dvm);  // normal along z
+  for (int a = 0; a < 2; ++a) EXPECT_NEAR(mg * dvg[a] + mm * dvm[a], 0.0, 1e-16) << a;
   for (int a = 0; a < 2; ++a) EXPECT_NEAR(vg[a] + dvg[a], vm[a] + dvm[a], 1e-15) << a;
   double before = 0, after = 0;
-  for (int a = 0; a < 3; ++a) {
+  for (int a = 0; a < 2; ++a) {
     before += 0.5 * (mg * vg[a] * vg[a] + mm * vm[a] * vm[a]);
     after += 0.5 * (mg * (vg[a] + dvg[a]) * (vg[a] + dvg[a]) + mm * (vm[a] + dvm[a]) * (vm[a] + dvm[a]));
   }
   EXPECT_LT(after, before);
-  // Equal velocities: nothing to exchange.
-  ghost_exchange<3>(vm, mg, vm, mm, 1u << 2, dvg, dvm);
+  EXPECT_EQ(dvg[2], 0.0) << "the ghost's normal velocity is the wall condition's";
+  EXPECT_EQ(dvm[2], 0.0) << "a mirror moving away from the wall is not pushed";
+  // The mirror image of the mirror: nothing to exchange.
+  const double image[3] = {vm[0], vm[1], -vm[2]};
+  ghost_exchange<3>(vm, image, mg, vm, mm, 1u << 2, dvg, dvm);
   for (int a = 0; a < 3; ++a) {
     EXPECT_EQ(dvg[a], 0.0);
-    EXPECT_EQ(dvm[a], 0.0);
+    EXPECT_NEAR(dvm[a], 0.0, 1e-16);
   }
+}
+
+// Water at rest against a wall: the first fluid node off it is pushed towards the wall by the pressure of the
+// particles on its fluid side (its stencil's wall side holds none), and the ghost node is pushed into the wall by
+// the same particles. By the mirror symmetry the two momenta are equal and opposite in the mirror's frame, so the
+// image's push stops the mirror node: no crowding against the wall.
+TEST(GhostMirror, ImagePushBalancesTheOneSidedPressureNextToAWall) {
+  const double mg = 0.2, mm = 1.0;
+  const double push = 1e-3;                      // the one-sided pressure's momentum on each, kg m/s
+  const double vm[2] = {-push / mm, 0.0};        // the mirror, pushed towards the wall at x < 0 (normal along x)
+  const double vpre[2] = {-push / mg, 0.0};      // the ghost before the wall condition: pushed into the wall
+  const double vg[2] = {0.0, 0.0};               // after it
+  double dvg[2], dvm[2];
+  flume::mpm::ghost_exchange<2>(vg, vpre, mg, vm, mm, 1u << 0, dvg, dvm);
+  EXPECT_NEAR(vm[0] + dvm[0], 0.0, 1e-18);
+  EXPECT_EQ(dvg[0], 0.0);
+  // A weaker push only slows it (the pooled velocity); a stronger one stops it and no more: a contact force does
+  // no positive work.
+  const double weak[2] = {-0.5 * push / mg, 0.0}, strong[2] = {-3 * push / mg, 0.0};
+  flume::mpm::ghost_exchange<2>(vg, weak, mg, vm, mm, 1u << 0, dvg, dvm);
+  EXPECT_NEAR(vm[0] + dvm[0], (mm * vm[0] - mg * weak[0]) / (mm + mg), 1e-18);
+  EXPECT_LT(vm[0] + dvm[0], 0.0);
+  flume::mpm::ghost_exchange<2>(vg, strong, mg, vm, mm, 1u << 0, dvg, dvm);
+  EXPECT_EQ(vm[0] + dvm[0], 0.0);
+  // The same wall seen from the other side (fluid towards lower indices): the signs flip with it.
+  const double vm_r[2] = {push / mm, 0.0}, vpre_r[2] = {push / mg, 0.0};
+  const unsigned axes_r = (1u << 0) | (1u << (0 + flume::mpm::kGhostSignShift));
+  flume::mpm::ghost_exchange<2>(vg, vpre_r, mg, vm_r, mm, axes_r, dvg, dvm);
+  EXPECT_NEAR(vm_r[0] + dvm[0], 0.0, 1e-18);
 }
 
 // The mirror node of a ghost is the node nearest its reflection, also when the wall lies between grid lines.
@@ -141,6 +172,8 @@ TEST(GhostMirror, MirrorNodeIsNearestTheReflection) {
     ghost_half_space<2>(xn, point, n, 0.02, offset, axes, ambiguous);
     EXPECT_EQ(offset[0], expect) << "node at x = " << x;  // 4.455 is a quarter cell in: held, not a ghost
     EXPECT_FALSE(ambiguous);
+    // A ghost's axes say the fluid lies towards lower x.
+    if (expect != 0) EXPECT_EQ(axes, (1u << 0) | (1u << flume::mpm::kGhostSignShift)) << "node at x = " << x;
   }
 }
 

