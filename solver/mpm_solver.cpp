@@ -96,6 +96,7 @@ class MpmSolver final : public Simulation {
     fill_tolerance_ = T(mpm::kFillTolerance);
     for (int d = 0; d < D; ++d) strain_slope_[d] = T(-f.density * scene.solver.gravity[d] / f.bulk_modulus);
     c_ = mpm::sound_speed(f.bulk_modulus, f.density);
+    push_axes_ = mpm::image_push_axes<D>(scene.solver.gravity.data());
     if (scene.debris.present) {
       if constexpr (D != 3) throw InputError(scene.file, "debris", "debris need a 3D scene");
       debris_ = std::make_unique<DebrisCoupling>(scene_);
@@ -805,7 +806,7 @@ class MpmSolver final : public Simulation {
         vg[d] = gv_[d][gh.idx];
         vm[d] = gv_[d][mi];
       }
-      mpm::ghost_exchange<D>(vg, gh.vpre, gm_[gh.idx], vm, gm_[mi], gh.axes, dvg, c.dv);
+      mpm::ghost_exchange<D>(vg, gh.vpre, gm_[gh.idx], vm, gm_[mi], gh.axes, push_axes_, dvg, c.dv);
       for (int d = 0; d < D; ++d) gv_[d][gh.idx] += dvg[d];  // ghosts are never mirrors: no exchange reads it
       c.node = mi;
       c.mass = gm_[mi];
@@ -1192,6 +1193,7 @@ class MpmSolver final : public Simulation {
   };
   static constexpr size_t kNoMirror = ~size_t(0);
   std::vector<MirrorChange> mirror_dv_;  // the mirrors' velocity changes, applied after every exchange
+  unsigned push_axes_ = 0;               // the wall normals that push with a ghost's image (mpm::image_push_axes)
   std::vector<std::vector<CouplingNode>> coupling_;  // per thread: the nodes found in boxes this step
   std::vector<double> push_out_;  // per particle block and box: impulse and moment of pushed-out particles
   // Nodes up to one cell outside a box are its moving-wall nodes: then a water particle touching the box puts

@@ -130,6 +130,7 @@ struct View {
   uint8_t* ghost_axes;    // per node: the normal axes the reflection keeps
   T* ghost_dv;            // D x nodes: a ghost's velocity before the walls, then its mirror's velocity change
   int32_t* ghost_wall;    // per node: the scene wall whose load takes the image's push, or -1
+  unsigned push_axes;     // mpm::image_push_axes
   size_t nodes;
   // constants
   T dx, inv_dx, rho, K, gamma, mu, psi, fill_tol, inv_cell_volume;
@@ -370,7 +371,7 @@ struct GhostExchange {
       vpre[d] = s.ghost_dv[d * s.nodes + idx];
       vm[d] = s.grid[(1 + d) * s.nodes + mi];
     }
-    mpm::ghost_exchange<D>(vg, vpre, s.grid[idx], vm, s.grid[mi], s.ghost_axes[idx], dvg, dvm);
+    mpm::ghost_exchange<D>(vg, vpre, s.grid[idx], vm, s.grid[mi], s.ghost_axes[idx], s.push_axes, dvg, dvm);
     for (int d = 0; d < D; ++d) {
       s.grid[(1 + d) * s.nodes + idx] = vg[d] + dvg[d];
       s.ghost_dv[d * s.nodes + idx] = dvm[d];
@@ -830,6 +831,7 @@ class MpmCuda final : public Simulation {
     s.K = K_;
     s.gamma = gamma_;
     s.law = mpm::TaitLaw<T>(K_, gamma_);
+    s.push_axes = mpm::image_push_axes<D>(scene_.solver.gravity.data());
     s.law_d = mpm::TaitLaw<double>(double(K_), double(gamma_));
     s.mu = mu_;
     s.psi = psi_;

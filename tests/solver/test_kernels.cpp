@@ -110,7 +110,7 @@ TEST(GhostMirror, ExchangeConservesTangentialMomentumAndCannotAddEnergy) {
   const double mg = 0.03, mm = 1.2;
   const double vg[3] = {0.9, -0.4, 0.0}, vpre[3] = {0.9, -0.4, -0.2}, vm[3] = {0.2, 0.5, 0.3};
   double dvg[3], dvm[3];
-  ghost_exchange<3>(vg, vpre, mg, vm, mm, 1u << 2, dvg, dvm);  // normal along z
+  ghost_exchange<3>(vg, vpre, mg, vm, mm, 1u << 2, 7u, dvg, dvm);  // normal along z
   for (int a = 0; a < 2; ++a) EXPECT_NEAR(mg * dvg[a] + mm * dvm[a], 0.0, 1e-16) << a;
   for (int a = 0; a < 2; ++a) EXPECT_NEAR(vg[a] + dvg[a], vm[a] + dvm[a], 1e-15) << a;
   double before = 0, after = 0;
@@ -123,7 +123,7 @@ TEST(GhostMirror, ExchangeConservesTangentialMomentumAndCannotAddEnergy) {
   EXPECT_EQ(dvm[2], 0.0) << "a mirror moving away from the wall is not pushed";
   // The mirror image of the mirror: nothing to exchange.
   const double image[3] = {vm[0], vm[1], -vm[2]};
-  ghost_exchange<3>(vm, image, mg, vm, mm, 1u << 2, dvg, dvm);
+  ghost_exchange<3>(vm, image, mg, vm, mm, 1u << 2, 7u, dvg, dvm);
   for (int a = 0; a < 3; ++a) {
     EXPECT_EQ(dvg[a], 0.0);
     EXPECT_NEAR(dvm[a], 0.0, 1e-16);
@@ -141,22 +141,30 @@ TEST(GhostMirror, ImagePushBalancesTheOneSidedPressureNextToAWall) {
   const double vpre[2] = {-push / mg, 0.0};      // the ghost before the wall condition: pushed into the wall
   const double vg[2] = {0.0, 0.0};               // after it
   double dvg[2], dvm[2];
-  flume::mpm::ghost_exchange<2>(vg, vpre, mg, vm, mm, 1u << 0, dvg, dvm);
+  flume::mpm::ghost_exchange<2>(vg, vpre, mg, vm, mm, 1u << 0, 3u, dvg, dvm);
   EXPECT_NEAR(vm[0] + dvm[0], 0.0, 1e-18);
   EXPECT_EQ(dvg[0], 0.0);
   // A weaker push only slows it (the pooled velocity); a stronger one stops it and no more: a contact force does
   // no positive work.
   const double weak[2] = {-0.5 * push / mg, 0.0}, strong[2] = {-3 * push / mg, 0.0};
-  flume::mpm::ghost_exchange<2>(vg, weak, mg, vm, mm, 1u << 0, dvg, dvm);
+  flume::mpm::ghost_exchange<2>(vg, weak, mg, vm, mm, 1u << 0, 3u, dvg, dvm);
   EXPECT_NEAR(vm[0] + dvm[0], (mm * vm[0] - mg * weak[0]) / (mm + mg), 1e-18);
   EXPECT_LT(vm[0] + dvm[0], 0.0);
-  flume::mpm::ghost_exchange<2>(vg, strong, mg, vm, mm, 1u << 0, dvg, dvm);
+  flume::mpm::ghost_exchange<2>(vg, strong, mg, vm, mm, 1u << 0, 3u, dvg, dvm);
   EXPECT_EQ(vm[0] + dvm[0], 0.0);
   // The same wall seen from the other side (fluid towards lower indices): the signs flip with it.
   const double vm_r[2] = {push / mm, 0.0}, vpre_r[2] = {push / mg, 0.0};
   const unsigned axes_r = (1u << 0) | (1u << (0 + flume::mpm::kGhostSignShift));
-  flume::mpm::ghost_exchange<2>(vg, vpre_r, mg, vm_r, mm, axes_r, dvg, dvm);
+  flume::mpm::ghost_exchange<2>(vg, vpre_r, mg, vm_r, mm, axes_r, 3u, dvg, dvm);
   EXPECT_NEAR(vm_r[0] + dvm[0], 0.0, 1e-18);
+}
+
+// Walls push with their ghosts' image across gravity only: a 2D scene's side walls (x), a 3D scene's side walls and
+// symmetry planes (x, y), never a floor.
+TEST(GhostMirror, ImagePushesAcrossGravityOnly) {
+  const double g2[2] = {0.0, -9.80665}, g3[3] = {0.0, 0.0, -9.80665};
+  EXPECT_EQ(flume::mpm::image_push_axes<2>(g2), 1u);
+  EXPECT_EQ(flume::mpm::image_push_axes<3>(g3), 3u);
 }
 
 // The mirror node of a ghost is the node nearest its reflection, also when the wall lies between grid lines.
