@@ -426,8 +426,9 @@ TEST_F(TradeoffMetrics, AReferenceZeroWithoutScaleIsLeftOutAndAWildcardMatchingN
 
 // The specs the docs tell people to run stay valid as the scenes and the spec format change.
 TEST(TradeoffSpec, ShippedSpecsParse) {
-  for (const char* file : {"/scenes/studies/tradeoff_waseda_2d.json",
-                           "/scenes/studies/tradeoff_waseda_2d_stiffness.json", "/scenes/studies/tradeoff_debris.json"})
+  for (const char* file : {"/scenes/studies/tradeoff_waseda_2d.json", "/scenes/studies/tradeoff_waseda_2d_stiffness.json",
+                           "/scenes/studies/tradeoff_debris.json", "/scenes/studies/waseda_half_vs_full.json",
+                           "/scenes/studies/waseda_half_vs_full_dx004.json"})
     EXPECT_NO_THROW(load_tradeoff_spec(kSrc + file)) << file;
   const TradeoffSpec debris = load_tradeoff_spec(kSrc + "/scenes/studies/tradeoff_debris.json");
   EXPECT_EQ(debris.labels.at(*debris.reference_setting), "dx 0.0075");
