@@ -73,7 +73,7 @@ class InflowBoundary {
   };
 
   InflowBoundary(const Scene& scene, double spacing, ParticleArrays<D, T> a)
-      : f_(scene.inflow), fluid_(scene.fluid), a_(a), s_(spacing) {
+      : f_(scene.inflow), fluid_(scene.fluid), law_(scene.fluid.bulk_modulus, scene.fluid.gamma), a_(a), s_(spacing) {
     x_in_ = f_.x_m;
     lb_ = f_.buffer_cells * scene.solver.dx;
     Vec3d at{};
@@ -258,7 +258,7 @@ class InflowBoundary {
       gx += g_[d] * double((*a_.x[d])[i]);
     }
     const double m = mass(i), V = (*a_.vol)[i];
-    return 0.5 * m * v2 - m * gx + V * mpm::tait_energy_density(double((*a_.e)[i]), fluid_.bulk_modulus, fluid_.gamma);
+    return 0.5 * m * v2 - m * gx + V * law_.energy_density(double((*a_.e)[i]));
   }
 
   void compact(const std::vector<char>& remove) {
@@ -281,6 +281,7 @@ class InflowBoundary {
 
   const InflowSettings& f_;
   FluidSettings fluid_;
+  mpm::TaitLaw<double> law_;  // for the energy of the particles the boundary sets
   ParticleArrays<D, T> a_;
   double s_, v0_ = 0, x_in_ = 0, lb_ = 0, floor_ = 0, g_up_ = 0, sy_ = 1;
   double g_[D] = {};

@@ -87,12 +87,10 @@ class MpmSolver final : public Simulation {
       gravity_[d] = T(scene.solver.gravity[d]);
     }
     const auto& f = scene.fluid;
-    K_ = T(f.bulk_modulus);
-    gamma_ = T(f.gamma);
     mu_ = T(f.viscosity);
     psi_ = T(f.jbar_psi);
-    law_ = mpm::TaitLaw<T>(K_, gamma_);
-    law_d_ = mpm::TaitLaw<double>(double(K_), double(gamma_));
+    law_ = mpm::TaitLaw<T>(T(f.bulk_modulus), T(f.gamma));
+    law_d_ = mpm::TaitLaw<double>(double(law_.K), double(law_.gamma));
     fill_tolerance_ = T(mpm::kFillTolerance);
     for (int d = 0; d < D; ++d) strain_slope_[d] = T(-f.density * scene.solver.gravity[d] / f.bulk_modulus);
     c_ = mpm::sound_speed(f.bulk_modulus, f.density);
@@ -809,7 +807,6 @@ class MpmSolver final : public Simulation {
       mpm::ghost_exchange<D>(vg, gh.vpre, gm_[gh.idx], vm, gm_[mi], gh.axes, push_axes_, dvg, c.dv);
       for (int d = 0; d < D; ++d) gv_[d][gh.idx] += dvg[d];  // ghosts are never mirrors: no exchange reads it
       c.node = mi;
-      c.mass = gm_[mi];
     }
     // The mirrors' changes in ghost order; the normal part of each (the image's push) is the wall's load.
     for (size_t q = 0; q < mirror_dv_.size(); ++q) {
@@ -819,7 +816,7 @@ class MpmSolver final : public Simulation {
       for (int d = 0; d < D; ++d) {
         gv_[d][c.node] += c.dv[d];
         if (gh.wall >= 0 && (gh.axes & (1u << d)))
-          load_impulse_[static_cast<size_t>(gh.wall) * D + d] -= double(c.mass) * double(c.dv[d]);
+          load_impulse_[static_cast<size_t>(gh.wall) * D + d] -= double(gm_[c.node]) * double(c.dv[d]);
       }
     }
   }
@@ -1156,7 +1153,7 @@ class MpmSolver final : public Simulation {
   T inv_dx_ = 0;
   double grid_lo_[D] = {};
   T gravity_[D] = {};
-  T K_ = 0, gamma_ = 0, mu_ = 0, psi_ = 0;
+  T mu_ = 0, psi_ = 0;
   mpm::TaitLaw<T> law_;         // the particle loops copy it into a local: a member is reloaded after every store
   mpm::TaitLaw<double> law_d_;  // the same law in double, for the energy audit and diagnostics
   T fill_tolerance_ = 0;  // mpm::fill_correction
@@ -1189,7 +1186,6 @@ class MpmSolver final : public Simulation {
   struct MirrorChange {
     size_t node;
     T dv[D];
-    T mass;  // the mirror node's, for the wall load
   };
   static constexpr size_t kNoMirror = ~size_t(0);
   std::vector<MirrorChange> mirror_dv_;  // the mirrors' velocity changes, applied after every exchange

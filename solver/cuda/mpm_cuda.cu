@@ -133,7 +133,7 @@ struct View {
   unsigned push_axes;     // mpm::image_push_axes
   size_t nodes;
   // constants
-  T dx, inv_dx, rho, K, gamma, mu, psi, fill_tol, inv_cell_volume;
+  T dx, inv_dx, rho, mu, psi, fill_tol, inv_cell_volume;
   mpm::TaitLaw<T> law;
   mpm::TaitLaw<double> law_d;  // the energy audit's, in double
   double rho_d;
@@ -638,7 +638,8 @@ class MpmCuda final : public Simulation {
     std::vector<T> e(n_);
     thr::copy(e_.begin(), e_.end(), e.begin());
     p.resize(n_);
-    for (size_t i = 0; i < n_; ++i) p[i] = mpm::tait_pressure(double(e[i]), double(K_), double(gamma_));
+    const mpm::TaitLaw<double> law{double(K_), double(gamma_)};
+    for (size_t i = 0; i < n_; ++i) p[i] = law.pressure(double(e[i]));
   }
   size_t grid_bytes() const override {
     return grid_.capacity() * sizeof(T) + gwall_.capacity() + ghost_axes_.capacity() +
@@ -828,8 +829,6 @@ class MpmCuda final : public Simulation {
     s.inv_dx = inv_dx_;
     s.rho = T(rho_);
     s.rho_d = rho_;
-    s.K = K_;
-    s.gamma = gamma_;
     s.law = mpm::TaitLaw<T>(K_, gamma_);
     s.push_axes = mpm::image_push_axes<D>(scene_.solver.gravity.data());
     s.law_d = mpm::TaitLaw<double>(double(K_), double(gamma_));

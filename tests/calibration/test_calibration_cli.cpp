@@ -1,12 +1,9 @@
 // `flume calibrate` end to end on the `gauge` test stand-in: twin experiments (a record simulated at known
 // parameters, with noise, is the target; the calibration must find the parameters again), multi-start with a
 // global algorithm, kill -9 and resume, and malformed inputs. Each test runs the real executable.
-#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
-#include <spawn.h>
 #include <sqlite3.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -19,8 +16,7 @@
 #include <thread>
 
 #include "store/h5/run_file.h"
-
-extern char** environ;
+#include "tests/common/run_command.h"
 
 namespace {
 
@@ -38,53 +34,13 @@ fs::path test_dir() {
 
 void write_file(const fs::path& p, const std::string& text) { std::ofstream(p) << text; }
 
-std::string read_file(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-pid_t spawn(const std::vector<std::string>& args, const fs::path& out, const fs::path& err) {
-  posix_spawn_file_actions_t fa;
-  posix_spawn_file_actions_init(&fa);
-  posix_spawn_file_actions_addopen(&fa, 1, out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_addopen(&fa, 2, err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  std::vector<char*> argv;
-  for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-  argv.push_back(nullptr);
-  pid_t pid = -1;
-  const int rc = posix_spawn(&pid, argv[0], &fa, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&fa);
-  return rc == 0 ? pid : -1;
-}
-
-int wait_for(pid_t pid, double timeout_s) {
-  const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
-  for (;;) {
-    int status = 0;
-    if (waitpid(pid, &status, WNOHANG) == pid)
-      return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-    if (std::chrono::steady_clock::now() > end) {
-      kill(pid, SIGKILL);
-      waitpid(pid, &status, 0);
-      return -1;
-    }
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
-  }
-}
-
-struct Result {
-  int rc;
-  std::string out, err;
-};
+using flume::test::read_file;
+using flume::test::spawn;
+using flume::test::wait_for;
+using Result = flume::test::CommandResult;
 
 Result run(const std::vector<std::string>& args, const fs::path& dir, double timeout_s = 140) {
-  const fs::path out = dir / "cmd.out", err = dir / "cmd.err";
-  const pid_t pid = spawn(args, out, err);
-  EXPECT_GT(pid, 0);
-  const int rc = wait_for(pid, timeout_s);
-  return {rc, read_file(out), read_file(err)};
+  return flume::test::run_command(args, dir, timeout_s);
 }
 
 std::vector<std::string> flume_cmd(std::initializer_list<std::string> args) {

@@ -1,10 +1,7 @@
 // `flume campaign` end to end on the analytic models: each test runs the real executable as a user would.
-#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
-#include <spawn.h>
 #include <sqlite3.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -16,7 +13,7 @@
 #include <sstream>
 #include <thread>
 
-extern char** environ;
+#include "tests/common/run_command.h"
 
 namespace {
 
@@ -36,57 +33,16 @@ void write_file(const fs::path& p, const std::string& text) {
   out << text;
 }
 
-std::string read_file(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-pid_t spawn(const std::vector<std::string>& args, const fs::path& out, const fs::path& err) {
-  posix_spawn_file_actions_t fa;
-  posix_spawn_file_actions_init(&fa);
-  posix_spawn_file_actions_addopen(&fa, 1, out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_addopen(&fa, 2, err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  std::vector<char*> argv;
-  for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-  argv.push_back(nullptr);
-  pid_t pid = -1;
-  const int rc = posix_spawn(&pid, argv[0], &fa, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&fa);
-  return rc == 0 ? pid : -1;
-}
-
-// Exit code, or 128 + signal; kills the process and returns -1 past the timeout.
-int wait_for(pid_t pid, double timeout_s) {
-  const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
-  for (;;) {
-    int status = 0;
-    const pid_t r = waitpid(pid, &status, WNOHANG);
-    if (r == pid) return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-    if (std::chrono::steady_clock::now() > end) {
-      kill(pid, SIGKILL);
-      waitpid(pid, &status, 0);
-      return -1;
-    }
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
-  }
-}
-
-struct Result {
-  int rc;
-  std::string out, err;
-};
+using flume::test::read_file;
+using flume::test::spawn;
+using flume::test::wait_for;
+using Result = flume::test::CommandResult;
 
 Result run(const std::vector<std::string>& args, const fs::path& dir, double timeout_s = 90) {
-  const fs::path out = dir / "cmd.out", err = dir / "cmd.err";
-  const pid_t pid = spawn(args, out, err);
-  EXPECT_GT(pid, 0);
-  const int rc = wait_for(pid, timeout_s);
-  return {rc, read_file(out), read_file(err)};
+  return flume::test::run_command(args, dir, timeout_s);
 }
 
-std::vector<std::string> flume(std::initializer_list<std::string> args) {
+std::vector<std::string> flume_cmd(std::initializer_list<std::string> args) {
   std::vector<std::string> v = {FLUME_EXE};
   v.insert(v.end(), args);
   return v;
@@ -169,7 +125,7 @@ TEST(CampaignResume, KillNineAtTwentyRandomMomentsThenEveryRunOkOnce) {
   std::map<std::string, std::string> finished_before;  // run id -> finished time, for ok runs
   int kills = 0;
   for (int k = 0; k < 20; ++k) {
-    const pid_t pid = spawn(flume({"campaign", "run", spec.string(), "--db", db.string(), "--workers", "2"}),
+    const pid_t pid = spawn(flume_cmd({"campaign", "run", spec.string(), "--db", db.string(), "--workers", "2"}),
                             dir / "out.log", dir / "err.log");
     ASSERT_GT(pid, 0);
     std::this_thread::sleep_for(std::chrono::duration<double>(moment_s(rng)));
@@ -183,7 +139,7 @@ TEST(CampaignResume, KillNineAtTwentyRandomMomentsThenEveryRunOkOnce) {
     for (const auto& row : query(db, "SELECT id, finished FROM runs WHERE status = 'ok'")) finished_before[row[0]] = row[1];
   }
   EXPECT_GE(kills, 15) << "most kills should land while the campaign was still running";
-  const Result last = run(flume({"campaign", "run", spec.string(), "--db", db.string(), "--workers", "2"}), dir);
+  const Result last = run(flume_cmd({"campaign", "run", spec.string(), "--db", db.string(), "--workers", "2"}), dir);
   ASSERT_EQ(last.rc, 0) << last.err;
   expect_each_point_ok_once(db, 80);
   for (const auto& [id, finished] : finished_before)
@@ -200,7 +156,7 @@ TEST(CampaignFailures, SegfaultHangUnstableAreRecordedAndOthersComplete) {
   "design": {"type": "grid"}, "seed": 1, "run": {"time_limit_s": 5.0}})");
   // 5 s, not less: under a heavily loaded machine (load 7-9 beside builds) starting the child process alone
   // took more than 1 s, and the segfaulting runs were recorded as timeouts.
-  const Result r = run(flume({"campaign", "run", spec.string(), "--db", db.string(), "--workers", "3"}), dir);
+  const Result r = run(flume_cmd({"campaign", "run", spec.string(), "--db", db.string(), "--workers", "3"}), dir);
   ASSERT_EQ(r.rc, 0) << r.err;
   const Rows rows = query(db, "SELECT behaviour, status, coalesce(message, '') FROM runs ORDER BY behaviour, x");
   ASSERT_EQ(rows.size(), 10u);
@@ -229,7 +185,7 @@ TEST(CampaignFailures, SegfaultHangUnstableAreRecordedAndOthersComplete) {
   EXPECT_EQ(seen.size(), 5u);
   // The ok runs carry their metric; the failures are listed by `status` with their messages.
   EXPECT_EQ(scalar(db, "SELECT count(*) FROM metrics m JOIN runs r ON r.id = m.run WHERE r.status = 'ok'"), "2");
-  const Result st = run(flume({"campaign", "status", "--db", db.string()}), dir);
+  const Result st = run(flume_cmd({"campaign", "status", "--db", db.string()}), dir);
   ASSERT_EQ(st.rc, 0) << st.err;
   EXPECT_NE(st.out.find("ok 2  unstable 2  failed 4  timeout 2"), std::string::npos) << st.out;
   EXPECT_NE(st.out.find("signal 11"), std::string::npos) << st.out;
@@ -246,7 +202,7 @@ TEST(CampaignMpi, SameResultsAsLocalPool) {
                  {"path": "x2", "distribution": {"type": "uniform", "lower": -3.141592653589793, "upper": 3.141592653589793}},
                  {"path": "x3", "distribution": {"type": "uniform", "lower": -3.141592653589793, "upper": 3.141592653589793}}],
   "design": {"type": "sobol", "samples": 12}, "seed": 3})");
-  const Result local = run(flume({"campaign", "run", spec.string(), "--db", (dir / "local.db").string(), "--workers", "2"}), dir);
+  const Result local = run(flume_cmd({"campaign", "run", spec.string(), "--db", (dir / "local.db").string(), "--workers", "2"}), dir);
   ASSERT_EQ(local.rc, 0) << local.err;
   const Result mpi = run(mpirun(3, spec, dir / "mpi.db"), dir);
   ASSERT_EQ(mpi.rc, 0) << mpi.out << mpi.err;
@@ -297,7 +253,7 @@ TEST(CampaignSpecErrors, MalformedSpecsExitTwoWithFieldPathAndLeaveDatabase) {
   const fs::path db = dir / "study.db";
   // A store with one finished campaign in it, to check that nothing changes.
   write_file(dir / "good.json", test_spec("good", 3, 0.0));
-  const Result good = run(flume({"campaign", "run", (dir / "good.json").string(), "--db", db.string()}), dir);
+  const Result good = run(flume_cmd({"campaign", "run", (dir / "good.json").string(), "--db", db.string()}), dir);
   ASSERT_EQ(good.rc, 0) << good.err;
   const std::string before = read_file(db);
   ASSERT_FALSE(before.empty());
@@ -334,7 +290,7 @@ TEST(CampaignSpecErrors, MalformedSpecsExitTwoWithFieldPathAndLeaveDatabase) {
   for (const auto& c : cases) {
     const fs::path spec = dir / "bad.json";
     write_file(spec, c.spec);
-    const Result r = run(flume({"campaign", "run", spec.string(), "--db", db.string()}), dir);
+    const Result r = run(flume_cmd({"campaign", "run", spec.string(), "--db", db.string()}), dir);
     EXPECT_EQ(r.rc, 2) << c.what << ": " << r.err;
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << c.what << ": " << r.err;
     EXPECT_NE(r.err.find(spec.string() + ": " + c.field + ":"), std::string::npos) << c.what << ": " << r.err;
@@ -348,10 +304,10 @@ TEST(CampaignSpecErrors, ChangedSpecUnderSameNameIsRefused) {
   const fs::path dir = test_dir();
   const fs::path db = dir / "study.db";
   write_file(dir / "a.json", test_spec("same-name", 3, 0.0));
-  ASSERT_EQ(run(flume({"campaign", "run", (dir / "a.json").string(), "--db", db.string()}), dir).rc, 0);
+  ASSERT_EQ(run(flume_cmd({"campaign", "run", (dir / "a.json").string(), "--db", db.string()}), dir).rc, 0);
   const std::string before = read_file(db);
   write_file(dir / "b.json", test_spec("same-name", 4, 0.0));
-  const Result r = run(flume({"campaign", "run", (dir / "b.json").string(), "--db", db.string()}), dir);
+  const Result r = run(flume_cmd({"campaign", "run", (dir / "b.json").string(), "--db", db.string()}), dir);
   EXPECT_EQ(r.rc, 2);
   EXPECT_NE(r.err.find("different spec"), std::string::npos) << r.err;
   EXPECT_EQ(read_file(db), before);
@@ -359,7 +315,7 @@ TEST(CampaignSpecErrors, ChangedSpecUnderSameNameIsRefused) {
   std::string longer = test_spec("same-name", 3, 0.0);
   longer.replace(longer.find("\"time_limit_s\": 60"), 18, "\"time_limit_s\": 90");
   write_file(dir / "c.json", longer);
-  const Result c = run(flume({"campaign", "run", (dir / "c.json").string(), "--db", db.string()}), dir);
+  const Result c = run(flume_cmd({"campaign", "run", (dir / "c.json").string(), "--db", db.string()}), dir);
   EXPECT_EQ(c.rc, 0) << c.err;
   EXPECT_NE(c.out.find("3 finished, 0 to run"), std::string::npos) << c.out;
 }
@@ -368,8 +324,8 @@ TEST(CampaignExport, CsvHasOneRowPerRunWithParametersAndMetrics) {
   const fs::path dir = test_dir();
   const fs::path db = dir / "study.db";
   write_file(dir / "a.json", test_spec("export", 5, 0.0));
-  ASSERT_EQ(run(flume({"campaign", "run", (dir / "a.json").string(), "--db", db.string(), "--workers", "2"}), dir).rc, 0);
-  const Result e = run(flume({"campaign", "export", "--db", db.string(), "--csv", (dir / "out.csv").string()}), dir);
+  ASSERT_EQ(run(flume_cmd({"campaign", "run", (dir / "a.json").string(), "--db", db.string(), "--workers", "2"}), dir).rc, 0);
+  const Result e = run(flume_cmd({"campaign", "export", "--db", db.string(), "--csv", (dir / "out.csv").string()}), dir);
   ASSERT_EQ(e.rc, 0) << e.err;
   std::istringstream csv(read_file(dir / "out.csv"));
   std::string header, line;
