@@ -291,7 +291,8 @@ FLUME_HD T hydrostatic_strain(const T* x, const T* slope) {
 // Boundary projection of a grid-node velocity (paper eq. 2). n is the outward normal of the solid (into
 // the fluid), vb the boundary's velocity. Separate: only motion into the solid is removed, and the
 // tangential slip is reduced by Coulomb friction mu |v_n| (Hu et al. 2018's separable friction).
-enum class Bc : int { kSticky = 0, kSlip = 1, kSeparate = 2 };
+// kSymmetry is not a wall: a mirror plane of the flow (SymmetryPlane), handled by folding the grid across it.
+enum class Bc : int { kSticky = 0, kSlip = 1, kSeparate = 2, kSymmetry = 3 };
 
 template <int D, typename T>
 FLUME_HD void project_velocity(T* v, const T* n, const T* vb, Bc bc, T mu) {
@@ -449,6 +450,52 @@ FLUME_HD unsigned image_push_axes(const double* gravity) {
   for (int a = 0; a < D; ++a)
     if (gravity[a] * gravity[a] <= 1e-12 * g2) axes |= 1u << a;
   return axes;
+}
+
+// A symmetry plane: the flow is the mirror image of itself about x[axis] = at, and only the side `sign` of it
+// (+1: x[axis] >= at, -1: x[axis] <= at) is modelled, as in a half-width basin. It is exact, not a wall: the
+// grid of the modelled half is folded so that every node receives what the particles of the missing half (the
+// images of the modelled ones) would have given it, and the nodes beyond the plane then take the mirror image of
+// their reflection. P2G of a particle and of its image are reflections of each other (the stencil weights are
+// even, the image's velocity, APIC matrix and stress are R v, R C R, R sigma R with R the reflection), so the
+// image's share of node i is the reflection of what the particle gave node i' = mirror(i). Before the grid
+// update, node i on the modelled side adds R * node i' (i' beyond the plane), and a node on the plane adds its
+// own reflection (its mass doubles, its normal momentum cancels); after the update, a node beyond the plane is
+// the reflection of its mirror. The modelled half then moves exactly as that half of the whole (to round-off),
+// whatever the walls, the gravity or the resolution, where a slip wall would make the plane's first fluid node
+// feel the pressure from one side only (mpm::ghost_exchange). A particle that the step carries across the plane
+// is replaced by its image, which the step carries into the modelled side. The plane must lie on a grid line or
+// midway between two: `twice` = 2 (at - grid_lo) / dx, an integer, and node i's mirror is twice - i.
+struct SymmetryPlane {
+  int axis = 0;
+  int sign = 1;
+  int twice = 0;
+  double at = 0;
+};
+
+// Where node index i (along the plane's axis) lies: -1 on the modelled side, 0 on the plane, +1 beyond it.
+FLUME_HD int symmetry_side(const SymmetryPlane& s, int i) {
+  const int r = 2 * i - s.twice;
+  if (r == 0) return 0;
+  return (r > 0) == (s.sign > 0) ? -1 : 1;
+}
+
+// The sign that reflection gives grid channel c (mass, momentum D, strain, volume): -1 for the normal momentum.
+FLUME_HD int symmetry_channel_sign(const SymmetryPlane& s, int c) { return c == 1 + s.axis ? -1 : 1; }
+
+// Replaces a particle that lies beyond the plane by its image: position, velocity and APIC matrix reflected.
+template <int D, typename T>
+FLUME_HD void symmetry_reflect_particle(const SymmetryPlane& s, T* x, T* v, T* C) {
+  const int a = s.axis;
+  const T at = T(s.at), d = x[a] - at;
+  if (!(s.sign > 0 ? d < T(0) : d > T(0))) return;
+  x[a] = at - d;
+  v[a] = -v[a];
+  for (int b = 0; b < D; ++b) {
+    if (b == a) continue;
+    C[a * D + b] = -C[a * D + b];
+    C[b * D + a] = -C[b * D + a];
+  }
 }
 
 // Signed distance and outward normal of an axis-aligned solid box [lo, hi] (negative inside).

@@ -27,6 +27,7 @@
 #include "solver/mpm_kernels.h"
 #include "solver/seeding.h"
 #include "solver/simulation.h"
+#include "solver/symmetry.h"
 
 namespace flume {
 namespace {
@@ -316,7 +317,14 @@ class MpmSolver final : public Simulation {
       w.bc = static_cast<mpm::Bc>(static_cast<int>(b.condition));
       w.mu = T(b.friction);
       walls_.push_back(w);
+      if (w.bc == mpm::Bc::kSymmetry) {
+        has_sym_ = true;
+        sym_ = symmetry_plane<D>(b, grid_lo_, dx_);
+      }
     }
+    if (has_sym_ && debris_)
+      throw InputError(scene_.file, "boundaries", "a symmetry plane cannot be used with debris (the bodies would "
+                                                  "need their mirror images): model the full span");
     domain_bc_ = static_cast<mpm::Bc>(static_cast<int>(scene_.domain_walls));
     domain_mu_ = T(scene_.domain_wall_friction);
     load_impulse_.assign(walls_.size() * D, 0.0);
@@ -594,6 +602,101 @@ class MpmSolver final : public Simulation {
     }
   }
 
+  // One grid node from what the particles gave it (its lanes `acc`): momentum to velocity, gravity, the walls
+  // (their loads weighted by `load_weight`), its ghost pairing and the debris coupling.
+  void update_node(const Lane& acc, long g, size_t idx, const int* node, bool near_debris, double load_weight, T dt,
+                   T inv_cell_volume, double* my_impulse, std::vector<CouplingNode>* my_coupling,
+                   std::vector<Ghost>* my_ghosts) {
+    const T m = acc[0];
+    if (m <= T(0)) {
+      gm_[idx] = T(0);
+      ge_[idx] = T(0);
+      gfill_[idx] = T(0);
+      gwall_[idx] = 0;
+      for (int d = 0; d < D; ++d) gv_[d][idx] = T(0);
+      return;
+    }
+    T v[D];
+    for (int d = 0; d < D; ++d) v[d] = acc[1 + d] / m + dt * gravity_[d];
+    uint8_t on_wall = 0;
+    // Ghost nodes (mpm::ghost_half_space): the reflection's offset.
+    Ghost ghost;  // its image reflects the particles' momentum only, not gravity's (mpm::ghost_exchange)
+    for (int d = 0; d < D; ++d) ghost.vpre[d] = acc[1 + d] / m;
+    bool ambiguous = false;
+    // Scene boundaries reaching this block.
+    double xn[D];
+    for (int d = 0; d < D; ++d) xn[d] = grid_lo_[d] + node[d] * dx_;
+    for (uint32_t q = g_bnd_start_[g]; q < g_bnd_start_[g + 1]; ++q) {
+      const Wall& w = walls_[g_bnd_[q]];
+      if (w.bc == mpm::Bc::kSymmetry) continue;  // not a wall (fold_symmetry)
+      double n[2 * D][D];
+      const int faces = mpm::wall_faces<D>(xn, w.box, w.ad, w.bd, dx_, n);
+      if (!faces) continue;
+      on_wall = 1;
+      T before[D];
+      for (int d = 0; d < D; ++d) before[d] = v[d];
+      mpm::apply_wall<D>(v, n, faces, w.vb, w.bc, w.mu);
+      for (int d = 0; d < D; ++d) my_impulse[g_bnd_[q] * D + d] += load_weight * double(m) * (before[d] - v[d]);
+      if (w.bc == mpm::Bc::kSticky) {
+        ambiguous = true;
+      } else {
+        const unsigned axes_before = ghost.axes;
+        if (w.box)
+          mpm::ghost_box<D>(xn, w.ad, w.bd, dx_, ghost.offset, ghost.axes, ambiguous);
+        else
+          mpm::ghost_half_space<D>(xn, w.ad, w.bd, dx_, ghost.offset, ghost.axes, ambiguous);
+        if (ghost.axes != axes_before) ghost.wall = static_cast<int>(g_bnd_[q]);
+      }
+    }
+    if (domain_bc_ == mpm::Bc::kSticky) {
+      for (int d = 0; d < D; ++d)
+        ambiguous |= xn[d] < scene_.domain_lo[d] - mpm::kGhostDepth * dx_ ||
+                     xn[d] > scene_.domain_hi[d] + mpm::kGhostDepth * dx_;
+    } else {
+      mpm::ghost_domain<D>(xn, scene_.domain_lo.data(), scene_.domain_hi.data(), dx_, ghost.offset, ghost.axes,
+                           ambiguous);
+    }
+    if (ghost.axes && !ambiguous) {
+      ghost.idx = idx;
+      for (int d = 0; d < D; ++d) ghost.offset[d] += node[d];  // now the mirror node itself
+      my_ghosts->push_back(ghost);
+    }
+    // The domain box is a container: nodes on or beyond its faces are walls.
+    for (int d = 0; d < D; ++d) {
+      T n[D] = {};
+      const double xn = grid_lo_[d] + node[d] * dx_;
+      if (xn <= scene_.domain_lo[d] + 1e-6 * dx_) {
+        n[d] = T(1);
+      } else if (xn >= scene_.domain_hi[d] - 1e-6 * dx_) {
+        n[d] = T(-1);
+      } else {
+        continue;
+      }
+      const T zero[D] = {};
+      mpm::project_velocity<D>(v, n, zero, domain_bc_, domain_mu_);
+      on_wall = 1;
+    }
+    // Debris: the node is a moving-wall node of the box it lies in; its velocity is set after every
+    // node is known, by the implicit exchange (debris_coupling.h).
+    if (near_debris) {
+      CouplingNode c;
+      for (int d = 0; d < D; ++d) c.x[d] = grid_lo_[d] + node[d] * dx_;
+      c.body = debris_->locate(c.x, coupling_band_ * dx_, c.n);
+      if (c.body >= 0) {
+        c.id = idx;
+        c.m = double(m);
+        for (int d = 0; d < D; ++d) c.v[d] = double(v[d]);
+        my_coupling->push_back(c);
+        on_wall = 1;
+      }
+    }
+    gm_[idx] = m;
+    ge_[idx] = acc[1 + D] / m;
+    gfill_[idx] = acc[2 + D] * inv_cell_volume;
+    gwall_[idx] = on_wall;
+    for (int d = 0; d < D; ++d) gv_[d][idx] = v[d];
+  }
+
   // Gathers the tiles into the grid blocks, then turns momentum into velocity, adds gravity and applies the
   // boundary conditions. Load cells sum the impulse the boundary gives the water at its nodes.
   void grid_update(T dt) {
@@ -603,12 +706,15 @@ class MpmSolver final : public Simulation {
     std::vector<double> impulse(static_cast<size_t>(nthreads) * walls_.size() * D, 0.0);
     if (debris_) coupling_.assign(nthreads, {});
     ghosts_.resize(nthreads);
+    deferred_lists_.resize(nthreads);
 #pragma omp parallel
     {
       double* my_impulse = impulse.data() + static_cast<size_t>(omp_get_thread_num()) * walls_.size() * D;
       std::vector<CouplingNode>* my_coupling = debris_ ? &coupling_[omp_get_thread_num()] : nullptr;
       std::vector<Ghost>* my_ghosts = &ghosts_[omp_get_thread_num()];
       my_ghosts->clear();
+      std::vector<Deferred>* my_deferred = &deferred_lists_[omp_get_thread_num()];
+      my_deferred->clear();
 #pragma omp for schedule(dynamic, 8)
       for (long g = 0; g < ngb; ++g) {
         Lane acc[kNodes];
@@ -663,95 +769,29 @@ class MpmSolver final : public Simulation {
           }
         }
         for (int k = 0; k < kNodes; ++k) {
-          const T m = acc[k][0];
-          if (m <= T(0)) {
-            gm_[base + k] = T(0);
-            ge_[base + k] = T(0);
-            gfill_[base + k] = T(0);
-            gwall_[base + k] = 0;
-            for (int d = 0; d < D; ++d) gv_[d][base + k] = T(0);
-            continue;
-          }
-          T v[D];
           int node[D];
           for (int d = D - 1, r = k; d >= 0; --d, r /= kBlock) node[d] = blk[d] * kBlock + r % kBlock;
-          for (int d = 0; d < D; ++d) v[d] = acc[k][1 + d] / m + dt * gravity_[d];
-          uint8_t on_wall = 0;
-          // Ghost nodes (mpm::ghost_half_space): the reflection's offset.
-          Ghost ghost;  // its image reflects the particles' momentum only, not gravity's (mpm::ghost_exchange)
-          for (int d = 0; d < D; ++d) ghost.vpre[d] = acc[k][1 + d] / m;
-          bool ambiguous = false;
-          // Scene boundaries reaching this block.
-          double xn[D];
-          for (int d = 0; d < D; ++d) xn[d] = grid_lo_[d] + node[d] * dx_;
-          for (uint32_t q = g_bnd_start_[g]; q < g_bnd_start_[g + 1]; ++q) {
-            const Wall& w = walls_[g_bnd_[q]];
-            double n[2 * D][D];
-            const int faces = mpm::wall_faces<D>(xn, w.box, w.ad, w.bd, dx_, n);
-            if (!faces) continue;
-            on_wall = 1;
-            T before[D];
-            for (int d = 0; d < D; ++d) before[d] = v[d];
-            mpm::apply_wall<D>(v, n, faces, w.vb, w.bc, w.mu);
-            for (int d = 0; d < D; ++d) my_impulse[g_bnd_[q] * D + d] += double(m) * (before[d] - v[d]);
-            if (w.bc == mpm::Bc::kSticky) {
-              ambiguous = true;
-            } else {
-              const unsigned axes_before = ghost.axes;
-              if (w.box)
-                mpm::ghost_box<D>(xn, w.ad, w.bd, dx_, ghost.offset, ghost.axes, ambiguous);
-              else
-                mpm::ghost_half_space<D>(xn, w.ad, w.bd, dx_, ghost.offset, ghost.axes, ambiguous);
-              if (ghost.axes != axes_before) ghost.wall = static_cast<int>(g_bnd_[q]);
-            }
+          if (has_sym_ && in_symmetry_zone(node)) {  // folded across the plane first, updated after
+            my_deferred->push_back({g, base + k, {}, acc[k], near_debris, -1});
+            for (int d = 0; d < D; ++d) my_deferred->back().node[d] = node[d];
+            continue;
           }
-          if (domain_bc_ == mpm::Bc::kSticky) {
-            for (int d = 0; d < D; ++d)
-              ambiguous |= xn[d] < scene_.domain_lo[d] - mpm::kGhostDepth * dx_ ||
-                           xn[d] > scene_.domain_hi[d] + mpm::kGhostDepth * dx_;
-          } else {
-            mpm::ghost_domain<D>(xn, scene_.domain_lo.data(), scene_.domain_hi.data(), dx_, ghost.offset, ghost.axes,
-                                 ambiguous);
-          }
-          if (ghost.axes && !ambiguous) {
-            ghost.idx = base + k;
-            for (int d = 0; d < D; ++d) ghost.offset[d] += node[d];  // now the mirror node itself
-            my_ghosts->push_back(ghost);
-          }
-          // The domain box is a container: nodes on or beyond its faces are walls.
-          for (int d = 0; d < D; ++d) {
-            T n[D] = {};
-            const double xn = grid_lo_[d] + node[d] * dx_;
-            if (xn <= scene_.domain_lo[d] + 1e-6 * dx_) {
-              n[d] = T(1);
-            } else if (xn >= scene_.domain_hi[d] - 1e-6 * dx_) {
-              n[d] = T(-1);
-            } else {
-              continue;
-            }
-            const T zero[D] = {};
-            mpm::project_velocity<D>(v, n, zero, domain_bc_, domain_mu_);
-            on_wall = 1;
-          }
-          // Debris: the node is a moving-wall node of the box it lies in; its velocity is set after every
-          // node is known, by the implicit exchange (debris_coupling.h).
-          if (near_debris) {
-            CouplingNode c;
-            for (int d = 0; d < D; ++d) c.x[d] = grid_lo_[d] + node[d] * dx_;
-            c.body = debris_->locate(c.x, coupling_band_ * dx_, c.n);
-            if (c.body >= 0) {
-              c.id = base + k;
-              c.m = double(m);
-              for (int d = 0; d < D; ++d) c.v[d] = double(v[d]);
-              my_coupling->push_back(c);
-              on_wall = 1;
-            }
-          }
-          gm_[base + k] = m;
-          ge_[base + k] = acc[k][1 + D] / m;
-          gfill_[base + k] = acc[k][2 + D] * inv_cell_volume;
-          gwall_[base + k] = on_wall;
-          for (int d = 0; d < D; ++d) gv_[d][base + k] = v[d];
+          update_node(acc[k], g, base + k, node, near_debris, 1.0, dt, inv_cell_volume, my_impulse, my_coupling, my_ghosts);
+        }
+      }
+      if (has_sym_) {
+#pragma omp single
+        fold_symmetry();
+        // The nodes on the modelled side and on the plane, now holding what the whole would give them; a load on
+        // the plane is half the whole's.
+        const long nd = static_cast<long>(deferred_.size());
+#pragma omp for schedule(static)
+        for (long q = 0; q < nd; ++q) {
+          const Deferred& e = deferred_[q];
+          const int side = mpm::symmetry_side(sym_, e.node[sym_.axis]);
+          if (side > 0) continue;
+          update_node(e.acc, e.block, e.idx, e.node, e.near_debris, side == 0 ? 0.5 : 1.0, dt, inv_cell_volume, my_impulse, my_coupling,
+                      my_ghosts);
         }
       }
     }
@@ -759,7 +799,85 @@ class MpmSolver final : public Simulation {
     for (int t = 0; t < nthreads; ++t)
       for (size_t k = 0; k < load_impulse_.size(); ++k) load_impulse_[k] += impulse[t * load_impulse_.size() + k];
     reflect_ghosts();
+    if (has_sym_) mirror_beyond_symmetry();
     if (debris_) couple_debris(double(dt));
+  }
+
+  // The symmetry plane (mpm::SymmetryPlane). A node within kSymmetryZone cells of it on the modelled side, on it
+  // or beyond it is updated after the fold; the particles stay on the modelled side, so only nodes one cell
+  // beyond it receive mass, and their mirrors lie within the zone.
+  static constexpr int kSymmetryZone = 3;
+  struct Deferred {
+    long block = 0;
+    size_t idx = 0;
+    int node[D] = {};
+    Lane acc;
+    bool near_debris = false;
+    long mirror = -1;  // beyond the plane: the entry of its mirror node
+  };
+  bool in_symmetry_zone(const int* node) const {
+    const int i = node[sym_.axis];
+    return mpm::symmetry_side(sym_, i) >= 0 || std::abs(2 * i - sym_.twice) <= 2 * kSymmetryZone;
+  }
+  // Grid index of a node (global node coordinates), or -1 where no active block holds it.
+  long grid_index(const int* node) const {
+    int blk[D], local = 0;
+    for (int d = 0; d < D; ++d) {
+      if (node[d] < 0) return -1;
+      blk[d] = node[d] / kBlock;
+      local = local * kBlock + node[d] % kBlock;
+    }
+    const auto it = std::lower_bound(gkeys_.begin(), gkeys_.end(), pack_key<D>(blk));
+    if (it == gkeys_.end() || *it != pack_key<D>(blk)) return -1;
+    return static_cast<long>(it - gkeys_.begin()) * kNodes + local;
+  }
+  // Folds the nodes beyond the plane onto their mirrors (their reflection added) and each node on the plane
+  // onto itself, in the raw lanes, before any of them is updated. Serial: a few layers of nodes.
+  void fold_symmetry() {
+    deferred_.clear();
+    for (const auto& list : deferred_lists_) deferred_.insert(deferred_.end(), list.begin(), list.end());
+    std::sort(deferred_.begin(), deferred_.end(), [](const Deferred& a, const Deferred& b) { return a.idx < b.idx; });
+    Lane sign;
+    for (int c = 0; c < kLanes; ++c) sign[c] = T(mpm::symmetry_channel_sign(sym_, c));
+    const auto entry = [&](size_t idx) -> long {
+      const auto it = std::lower_bound(deferred_.begin(), deferred_.end(), idx,
+                                       [](const Deferred& e, size_t i) { return e.idx < i; });
+      return it != deferred_.end() && it->idx == idx ? static_cast<long>(it - deferred_.begin()) : -1;
+    };
+    for (auto& e : deferred_) {
+      const int side = mpm::symmetry_side(sym_, e.node[sym_.axis]);
+      if (side == 0) {
+        e.acc += sign * e.acc;
+      } else if (side > 0) {
+        int mirror[D];
+        for (int d = 0; d < D; ++d) mirror[d] = e.node[d];
+        mirror[sym_.axis] = sym_.twice - e.node[sym_.axis];
+        const long gi = grid_index(mirror);
+        e.mirror = gi >= 0 ? entry(static_cast<size_t>(gi)) : -1;
+        if (e.mirror >= 0) deferred_[e.mirror].acc += sign * e.acc;
+      }
+    }
+  }
+  // After the walls and the ghosts: every node beyond the plane is the reflection of its mirror.
+  void mirror_beyond_symmetry() {
+    const long nd = static_cast<long>(deferred_.size());
+#pragma omp parallel for schedule(static)
+    for (long q = 0; q < nd; ++q) {
+      const Deferred& e = deferred_[q];
+      if (mpm::symmetry_side(sym_, e.node[sym_.axis]) <= 0) continue;
+      if (e.mirror < 0) {  // nothing on the modelled side within reach: no water here either
+        gm_[e.idx] = ge_[e.idx] = gfill_[e.idx] = T(0);
+        gwall_[e.idx] = 0;
+        for (int d = 0; d < D; ++d) gv_[d][e.idx] = T(0);
+        continue;
+      }
+      const size_t mi = deferred_[e.mirror].idx;
+      gm_[e.idx] = gm_[mi];
+      ge_[e.idx] = ge_[mi];
+      gfill_[e.idx] = gfill_[mi];
+      gwall_[e.idx] = gwall_[mi];
+      for (int d = 0; d < D; ++d) gv_[d][e.idx] = T(mpm::symmetry_channel_sign(sym_, 1 + d)) * gv_[d][mi];
+    }
   }
 
   // Ghost nodes exchange tangential momentum with their reflection, a free node with water (mpm::ghost_exchange).
@@ -898,6 +1016,8 @@ class MpmSolver final : public Simulation {
     const mpm::TaitLaw<T> law = law_;
     const mpm::TaitLaw<double> law_d = law_d_;
     const T psi = psi_, fill_tol = fill_tolerance_, inv_dx = inv_dx_;
+    const bool has_sym = has_sym_;
+    const mpm::SymmetryPlane sym = sym_;
     T slope_h[D], lo_grid[D], grav[D];
     for (int d = 0; d < D; ++d) {
       slope_h[d] = strain_slope_[d];
@@ -1023,9 +1143,11 @@ class MpmSolver final : public Simulation {
         T v2 = 0, gx = 0;
         bool finite = std::isfinite(e) && e > T(-1);
         bool inside = true;
+        for (int d = 0; d < D; ++d) xp[d] += dt * vn[d];
+        if (has_sym) mpm::symmetry_reflect_particle<D>(sym, xp, vn, Cn);  // carried across: its image instead
         for (int d = 0; d < D; ++d) {
           v_[d][i] = vn[d];
-          x_[d][i] += dt * vn[d];
+          x_[d][i] = xp[d];
         }
         if (near_debris) push_out_of_debris(i, &push_out_[static_cast<size_t>(p) * nbodies * 6]);
         for (int d = 0; d < D; ++d) {
@@ -1183,6 +1305,10 @@ class MpmSolver final : public Simulation {
   std::vector<T> tag_;  // the inflow's buffer particles (1) and free water (0); empty without an inflow
   std::vector<std::vector<Ghost>> ghosts_;  // per thread: this step's ghost nodes (reflect_ghosts)
   std::vector<Ghost> all_ghosts_;            // all of them, in node order
+  std::vector<std::vector<Deferred>> deferred_lists_;  // per thread: this step's nodes near the symmetry plane
+  std::vector<Deferred> deferred_;                     // all of them, in node order (fold_symmetry)
+  bool has_sym_ = false;
+  mpm::SymmetryPlane sym_;
   struct MirrorChange {
     size_t node;
     T dv[D];

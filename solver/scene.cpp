@@ -396,7 +396,10 @@ void expand_basin(json& root, Basin& B, const std::string& file, int dim) {
     return json{{"name", name}, {"type", "half_space"}, {"point", point}, {"normal", normal},
                 {"condition", walls}, {"friction", wall_friction}};
   };
-  root["domain"] = {{"lo", at(x_lo, -pad, -pad)}, {"hi", at(L + pad, W + pad, top + pad)}, {"walls", "slip"}};
+  // A half span's symmetry plane must lie on a grid line or midway (mpm::SymmetryPlane): the domain starts a whole
+  // number of half cells below it.
+  const double y_lo = half ? W - 0.5 * dx * std::ceil(2 * (W + pad) / dx - 1e-9) : -pad;
+  root["domain"] = {{"lo", at(x_lo, y_lo, -pad)}, {"hi", at(L + pad, W + pad, top + pad)}, {"walls", "slip"}};
   json bnd = json::array();
   if (!apron) bnd.push_back(plane("back_wall", at(0, 0, 0), at(1, 0, 0)));
   bnd.push_back(plane("floor", at(0, 0, 0), at(0, 0, 1)));
@@ -405,7 +408,7 @@ void expand_basin(json& root, Basin& B, const std::string& file, int dim) {
     bnd.push_back(plane("side_wall", at(0, 0, 0), at(0, 1, 0)));
     if (half) {
       json sym = plane("symmetry", at(0, W, 0), at(0, -1, 0));
-      sym["condition"] = "slip";  // a mirror plane: no flow across, free along
+      sym["condition"] = "symmetry";  // a mirror plane of the flow: exact, not a wall (mpm::SymmetryPlane)
       sym["friction"] = 0.0;
       bnd.push_back(sym);
     } else {
@@ -622,9 +625,31 @@ Scene parse(const json& root_json, const std::string& file) {
       b.condition = r.choice<BoundaryCondition>("condition", BoundaryCondition::kSeparate,
                                                 {{"sticky", BoundaryCondition::kSticky},
                                                  {"slip", BoundaryCondition::kSlip},
-                                                 {"separate", BoundaryCondition::kSeparate}});
+                                                 {"separate", BoundaryCondition::kSeparate},
+                                                 {"symmetry", BoundaryCondition::kSymmetry}});
       b.friction = r.number("friction", 0.0, 0.0, 10.0);
       b.velocity = r.vec("velocity", dim, Vec3d{});
+      if (b.condition == BoundaryCondition::kSymmetry) {
+        // A mirror plane of the flow (mpm::SymmetryPlane): a fixed, frictionless, axis-aligned plane whose
+        // reflection maps grid nodes onto grid nodes.
+        if (b.shape.type != ShapeType::kHalfSpace) r.fail("condition", "symmetry needs type half_space (a plane)");
+        int axis = -1;
+        for (int d = 0; d < dim; ++d)
+          if (std::fabs(std::fabs(b.shape.normal[d]) - 1.0) < 1e-12) axis = d;
+        if (axis < 0) r.fail("normal", "a symmetry plane's normal must lie along a grid axis");
+        for (int d = 0; d < dim; ++d)
+          if (b.velocity[d] != 0.0) r.fail("velocity", "a symmetry plane does not move (must be 0)");
+        if (b.friction != 0.0) r.fail("friction", "a symmetry plane has no friction (must be 0)");
+        const double cells = 2 * (b.shape.point[axis] - sc.domain_lo[axis]) / sc.solver.dx;
+        if (std::fabs(cells - std::round(cells)) > 1e-6)
+          r.fail("point", "a symmetry plane must lie on a grid line or midway between two: axis " +
+                              std::to_string(axis) + " at " + fmt(b.shape.point[axis]) + " m is " +
+                              fmt(0.5 * cells) + " cells (dx " + fmt(sc.solver.dx) + ") from domain.lo " +
+                              fmt(sc.domain_lo[axis]) + " m; allowed: a whole or half number of cells");
+        for (const auto& o : sc.boundaries)
+          if (o.condition == BoundaryCondition::kSymmetry)
+            r.fail("condition", "one symmetry plane per scene (found '" + o.name + "' already)");
+      }
       r.finish();
       sc.boundaries.push_back(b);
     }
@@ -877,6 +902,7 @@ const char* to_string(BoundaryCondition c) {
   switch (c) {
     case BoundaryCondition::kSticky: return "sticky";
     case BoundaryCondition::kSlip: return "slip";
+    case BoundaryCondition::kSymmetry: return "symmetry";
     default: return "separate";
   }
 }

@@ -9,7 +9,8 @@
 namespace flume {
 
 enum class Precision { kFloat, kDouble };
-enum class BoundaryCondition { kSticky, kSlip, kSeparate };  // paper eq. 2
+// paper eq. 2; kSymmetry: an axis-aligned half-space that is a mirror plane of the flow (mpm::SymmetryPlane)
+enum class BoundaryCondition { kSticky, kSlip, kSeparate, kSymmetry };
 enum class ShapeType { kBox, kHalfSpace };
 
 using Vec3d = std::array<double, 3>;  // 2D scenes use the first two entries (x, z); the third is 0.
