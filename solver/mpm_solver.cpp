@@ -466,6 +466,7 @@ class MpmSolver final : public Simulation {
     unsigned axes = 0;    // the normal axes: kept; the others are exchanged with the mirror
     T vpre[D] = {};       // the ghost's velocity from the particles alone (mpm::ghost_exchange)
     int wall = -1;        // the scene wall whose load takes the image's push (-1: the domain box)
+    double load_weight = 1;  // 1/2 on a symmetry plane (the whole's load there is twice the half's)
   };
   struct Wall {
     bool box = true;
@@ -658,6 +659,7 @@ class MpmSolver final : public Simulation {
     }
     if (ghost.axes && !ambiguous) {
       ghost.idx = idx;
+    ghost.load_weight = load_weight;
       for (int d = 0; d < D; ++d) ghost.offset[d] += node[d];  // now the mirror node itself
       my_ghosts->push_back(ghost);
     }
@@ -934,7 +936,7 @@ class MpmSolver final : public Simulation {
       for (int d = 0; d < D; ++d) {
         gv_[d][c.node] += c.dv[d];
         if (gh.wall >= 0 && (gh.axes & (1u << d)))
-          load_impulse_[static_cast<size_t>(gh.wall) * D + d] -= double(gm_[c.node]) * double(c.dv[d]);
+          load_impulse_[static_cast<size_t>(gh.wall) * D + d] -= gh.load_weight * double(gm_[c.node]) * double(c.dv[d]);
       }
     }
   }

@@ -429,7 +429,8 @@ void expand_basin(json& root, Basin& B, const std::string& file, int dim) {
       double yh = yl + size;
       if (dim == 2 && !(yl <= B.slice_y_m && B.slice_y_m <= yh)) continue;  // not cut by the slice
       if (half && yl >= W) continue;                                       // in the mirrored half
-      if (half && yh > W) yh = W + pad;                                     // cut by the symmetry plane
+      // A column the symmetry plane cuts stays whole: the grid beyond the plane is the mirror of the modelled side
+      // (mpm::SymmetryPlane), and a node inside it must be held as in the full basin.
       const std::string name = "column_r" + std::to_string(rr + 1) + "c" + std::to_string(c + 1);
       bnd.push_back(box(name, xl, xl + size, yl, yh, B.apron_height_m - 2 * pad, top + 2 * pad));
       B.obstacle_names.push_back(name);

@@ -52,6 +52,7 @@
 #include "solver/mpm_kernels.h"
 #include "solver/seeding.h"
 #include "solver/simulation.h"
+#include "solver/symmetry.h"
 
 namespace flume {
 namespace {
@@ -131,6 +132,8 @@ struct View {
   T* ghost_dv;            // D x nodes: a ghost's velocity before the walls, then its mirror's velocity change
   int32_t* ghost_wall;    // per node: the scene wall whose load takes the image's push, or -1
   unsigned push_axes;     // mpm::image_push_axes
+  int has_sym = 0;        // a symmetry plane (mpm::SymmetryPlane): folded before the update, mirrored after
+  mpm::SymmetryPlane sym;
   size_t nodes;
   // constants
   T dx, inv_dx, rho, mu, psi, fill_tol, inv_cell_volume;
@@ -264,6 +267,51 @@ struct P2G {
   }
 };
 
+// The symmetry plane's fold (mpm::SymmetryPlane; MpmSolver::fold_symmetry), one node, before the update: a node
+// beyond the plane adds its reflection to its mirror, a node on the plane its own. A mirror has one node beyond
+// the plane, and no node both reads and is written, so no atomics are needed.
+template <int D, typename T>
+struct SymmetryFold {
+  View<D, T> s;
+  FLUME_HD void operator()(size_t idx) const {
+    constexpr int kNodes = View<D, T>::kNodes;
+    int blk[D], node[D];
+    unpack_key<D>(s.gkeys[idx / kNodes], blk);
+    for (int d = D - 1, r = static_cast<int>(idx % kNodes); d >= 0; --d, r /= kBlock)
+      node[d] = blk[d] * kBlock + r % kBlock;
+    const int side = mpm::symmetry_side(s.sym, node[s.sym.axis]);
+    if (side < 0 || !(s.grid[idx] > T(0))) return;
+    if (side == 0) {
+      for (int c = 0; c < View<D, T>::kChannels; ++c)
+        s.grid[c * s.nodes + idx] += T(mpm::symmetry_channel_sign(s.sym, c)) * s.grid[c * s.nodes + idx];
+      return;
+    }
+    node[s.sym.axis] = s.sym.twice - node[s.sym.axis];
+    const int64_t mi = s.grid_index(node);
+    if (mi < 0) return;
+    for (int c = 0; c < View<D, T>::kChannels; ++c)
+      s.grid[c * s.nodes + mi] += T(mpm::symmetry_channel_sign(s.sym, c)) * s.grid[c * s.nodes + idx];
+  }
+};
+// After the walls and the ghosts: a node beyond the plane is the reflection of its mirror.
+template <int D, typename T>
+struct SymmetryMirror {
+  View<D, T> s;
+  FLUME_HD void operator()(size_t idx) const {
+    constexpr int kNodes = View<D, T>::kNodes;
+    int blk[D], node[D];
+    unpack_key<D>(s.gkeys[idx / kNodes], blk);
+    for (int d = D - 1, r = static_cast<int>(idx % kNodes); d >= 0; --d, r /= kBlock)
+      node[d] = blk[d] * kBlock + r % kBlock;
+    if (mpm::symmetry_side(s.sym, node[s.sym.axis]) <= 0) return;
+    node[s.sym.axis] = s.sym.twice - node[s.sym.axis];
+    const int64_t mi = s.grid_index(node);
+    for (int c = 0; c < View<D, T>::kChannels; ++c)
+      s.grid[c * s.nodes + idx] = mi < 0 ? T(0) : T(mpm::symmetry_channel_sign(s.sym, c)) * s.grid[c * s.nodes + mi];
+    s.gwall[idx] = mi < 0 ? 0 : s.gwall[mi];
+  }
+};
+
 // Grid update, one node: momentum to velocity, gravity, the scene's walls (paper eq. 2) in scene order,
 // then the domain box as a container; flags wall nodes for the J-bar average. As MpmSolver::grid_update.
 template <int D, typename T>
@@ -283,6 +331,13 @@ struct GridUpdate {
     unpack_key<D>(s.gkeys[idx / kNodes], blk);
     for (int d = D - 1, r = static_cast<int>(idx % kNodes); d >= 0; --d, r /= kBlock)
       node[d] = blk[d] * kBlock + r % kBlock;
+    // Beyond the symmetry plane: the mirror of its reflection, once that is updated (SymmetryMirror).
+    const int sym_side = s.has_sym ? mpm::symmetry_side(s.sym, node[s.sym.axis]) : -1;
+    if (sym_side > 0) {
+      s.ghost_mirror[idx] = -1;
+      return;
+    }
+    const double load_weight = sym_side == 0 ? 0.5 : 1.0;  // a load on the plane is half the whole's
     T v[D];
     for (int d = 0; d < D; ++d) v[d] = s.grid[(1 + d) * s.nodes + idx] / m + dt * s.gravity[d];
     uint8_t on_wall = 0;
@@ -296,6 +351,7 @@ struct GridUpdate {
     for (int d = 0; d < D; ++d) s.ghost_dv[d * s.nodes + idx] = s.grid[(1 + d) * s.nodes + idx] / m;
     for (int k = 0; k < s.n_walls; ++k) {
       const Wall<D, T>& w = s.walls[k];
+      if (static_cast<mpm::Bc>(w.bc) == mpm::Bc::kSymmetry) continue;  // not a wall (SymmetryFold)
       double n[2 * D][D];
       const int faces = mpm::wall_faces<D>(xn, w.box != 0, w.a, w.b, s.dx_d, n);
       if (!faces) continue;
@@ -304,7 +360,7 @@ struct GridUpdate {
       for (int d = 0; d < D; ++d) before[d] = v[d];
       mpm::apply_wall<D>(v, n, faces, w.vb, static_cast<mpm::Bc>(w.bc), w.mu);
       if (s.impulse)
-        for (int d = 0; d < D; ++d) atomic_add(&s.impulse[k * D + d], double(m) * (before[d] - v[d]));
+        for (int d = 0; d < D; ++d) atomic_add(&s.impulse[k * D + d], load_weight * double(m) * (before[d] - v[d]));
       if (static_cast<mpm::Bc>(w.bc) == mpm::Bc::kSticky) {
         ambiguous = true;
       } else {
@@ -385,11 +441,21 @@ struct GhostMirrorUpdate {
     int64_t mi;
     if (!ghost_pair(s, idx, mi)) return;
     const int wall = s.ghost_wall[idx];
+    double load_weight = 1;  // 1/2 on a symmetry plane (GridUpdate)
+    if (s.has_sym && s.impulse && wall >= 0) {
+      constexpr int kNodes = View<D, T>::kNodes;
+      int blk[D];
+      unpack_key<D>(s.gkeys[idx / kNodes], blk);
+      int r = static_cast<int>(idx % kNodes), i = 0;
+      for (int d = D - 1; d >= 0; --d, r /= kBlock)
+        if (d == s.sym.axis) i = blk[d] * kBlock + r % kBlock;
+      if (mpm::symmetry_side(s.sym, i) == 0) load_weight = 0.5;
+    }
     for (int d = 0; d < D; ++d) {
       atomic_add(&s.grid[(1 + d) * s.nodes + mi], s.ghost_dv[d * s.nodes + idx]);
       // The normal part (the image's push) is the wall's load. The mirror's mass is read before any change.
       if (s.impulse && wall >= 0 && (s.ghost_axes[idx] & (1u << d)))
-        atomic_add(&s.impulse[wall * D + d], -double(s.grid[mi]) * double(s.ghost_dv[d * s.nodes + idx]));
+        atomic_add(&s.impulse[wall * D + d], -load_weight * double(s.grid[mi]) * double(s.ghost_dv[d * s.nodes + idx]));
     }
   }
 };
@@ -455,9 +521,11 @@ struct G2P {
     }
     s.fill_work[i] = work;
     s.e[i] = e;
+    for (int d = 0; d < D; ++d) xp[d] += dt * vn[d];
+    if (s.has_sym) mpm::symmetry_reflect_particle<D>(s.sym, xp, vn, Cn);  // carried across: its image instead
     for (int d = 0; d < D; ++d) {
       s.v[d][i] = vn[d];
-      s.x[d][i] = xp[d] + dt * vn[d];
+      s.x[d][i] = xp[d];
     }
     for (int k = 0; k < D * D; ++k) s.C[k][i] = Cn[k];
   }
@@ -594,9 +662,11 @@ class MpmCuda final : public Simulation {
     // The vacuum's hold: an upward force f(t) m |g| on the held water (as MpmSolver::p2g).
     const T lift = T(double(dt) * scene_.basin.forcing.hold(time_) * std::fabs(scene_.solver.gravity[D - 1]));
     thr::for_each(thr::device, first, first + n_, P2G<D, T>{s, T(dt), lift});
+    if (s.has_sym) thr::for_each(thr::device, first, first + s.nodes, SymmetryFold<D, T>{s});
     thr::for_each(thr::device, first, first + s.nodes, GridUpdate<D, T>{s, T(dt)});
     thr::for_each(thr::device, first, first + s.nodes, GhostExchange<D, T>{s});
     thr::for_each(thr::device, first, first + s.nodes, GhostMirrorUpdate<D, T>{s});
+    if (s.has_sym) thr::for_each(thr::device, first, first + s.nodes, SymmetryMirror<D, T>{s});
     if (has_loads_) thr::copy(impulse_.begin(), impulse_.end(), load_impulse_.begin());
     thr::for_each(thr::device, first, first + n_, G2P<D, T>{s, T(dt), T(mpm::fill_rate(dt, c_, dx_))});
     host_fresh_ = false;
@@ -787,6 +857,10 @@ class MpmCuda final : public Simulation {
       w.bc = static_cast<int>(b.condition);
       w.mu = T(b.friction);
       walls.push_back(w);
+      if (b.condition == BoundaryCondition::kSymmetry) {
+        has_sym_ = 1;
+        sym_ = symmetry_plane<D>(b, grid_lo_, dx_);
+      }
     }
     walls_.assign(walls.begin(), walls.end());
     n_walls_ = static_cast<int>(walls.size());
@@ -831,6 +905,8 @@ class MpmCuda final : public Simulation {
     s.rho_d = rho_;
     s.law = mpm::TaitLaw<T>(K_, gamma_);
     s.push_axes = mpm::image_push_axes<D>(scene_.solver.gravity.data());
+    s.has_sym = has_sym_;
+    s.sym = sym_;
     s.law_d = mpm::TaitLaw<double>(double(K_), double(gamma_));
     s.mu = mu_;
     s.psi = psi_;
@@ -989,6 +1065,8 @@ class MpmCuda final : public Simulation {
   thr::device_vector<double> impulse_;
   thr::device_vector<double> fill_work_;
   int n_walls_ = 0;
+  int has_sym_ = 0;  // a symmetry plane (mpm::SymmetryPlane)
+  mpm::SymmetryPlane sym_;
   int domain_bc_ = 2;
   T domain_mu_ = 0;
   bool has_loads_ = false;

@@ -26,7 +26,7 @@ namespace {
 // 13 cells) or midway between two (-0.05: 12.5 cells).
 std::string tank(const std::string& span, const std::string& plane, double y_lo) {
   const bool half = span != "full";
-  const double y_hi = half ? 0.26 : 0.46, water_hi = half ? 0.2 : 0.4, column_hi = half ? 0.26 : 0.23;
+  const double y_hi = half ? 0.26 : 0.46, water_hi = half ? 0.2 : 0.4, column_hi = 0.23;
   char text[4096];
   std::snprintf(text, sizeof text, R"({
     "name": "tank", "dimension": 3,
