@@ -316,6 +316,7 @@ class MpmSolver final : public Simulation {
       }
       w.bc = static_cast<mpm::Bc>(static_cast<int>(b.condition));
       w.mu = T(b.friction);
+      w.subcell_axes = b.subcell_axes;
       walls_.push_back(w);
       if (w.bc == mpm::Bc::kSymmetry) {
         has_sym_ = true;
@@ -475,6 +476,7 @@ class MpmSolver final : public Simulation {
     T vb[D];
     mpm::Bc bc = mpm::Bc::kSeparate;
     T mu = 0;
+    unsigned subcell_axes = 0;  // mpm::subcell_cover
   };
   T wall_distance(const Wall& w, const T* x, T* n) const {
     return w.box ? mpm::box_distance<D>(x, w.a, w.b, n) : mpm::half_space_distance<D>(x, w.a, w.b, n);
@@ -632,7 +634,21 @@ class MpmSolver final : public Simulation {
       if (w.bc == mpm::Bc::kSymmetry) continue;  // not a wall (fold_symmetry)
       double n[2 * D][D];
       const int faces = mpm::wall_faces<D>(xn, w.box, w.ad, w.bd, dx_, n);
-      if (!faces) continue;
+      if (!faces) {
+        if (w.subcell_axes) {  // a node partly covered by a face between grid lines
+          double nearest[D];
+          const double cover = mpm::subcell_cover<D>(xn, w.ad, w.bd, dx_, w.subcell_axes, nearest);
+          if (cover > 0) {
+            T before[D], held[D];
+            for (int d = 0; d < D; ++d) before[d] = held[d] = v[d];
+            const int nf = mpm::wall_faces<D>(nearest, w.box, w.ad, w.bd, dx_, n);
+            mpm::apply_wall<D>(held, n, nf, w.vb, w.bc, w.mu);
+            mpm::subcell_drag<D>(v, held, cover, mpm::subcell_rate0(c_, dx_), dt);
+            for (int d = 0; d < D; ++d) my_impulse[g_bnd_[q] * D + d] += load_weight * double(m) * (before[d] - v[d]);
+          }
+        }
+        continue;
+      }
       on_wall = 1;
       T before[D];
       for (int d = 0; d < D; ++d) before[d] = v[d];

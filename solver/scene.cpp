@@ -396,9 +396,11 @@ void expand_basin(json& root, Basin& B, const std::string& file, int dim) {
     return json{{"name", name}, {"type", "half_space"}, {"point", point}, {"normal", normal},
                 {"condition", walls}, {"friction", wall_friction}};
   };
-  // A half span's symmetry plane must lie on a grid line or midway (mpm::SymmetryPlane): the domain starts a whole
-  // number of half cells below it.
-  const double y_lo = half ? W - 0.5 * dx * std::ceil(2 * (W + pad) / dx - 1e-9) : -pad;
+  // The grid is symmetric about the centreline: the domain starts a whole number of half cells below it. A half
+  // span's symmetry plane must lie on a grid line or midway (mpm::SymmetryPlane), and the full basin then has the
+  // same grid on that side, so that the two compare node for node (-pad itself wherever dx divides the half width).
+  const double centre = 0.5 * B.width_m;
+  const double y_lo = centre - 0.5 * dx * std::ceil(2 * (centre + pad) / dx - 1e-9);
   root["domain"] = {{"lo", at(x_lo, y_lo, -pad)}, {"hi", at(L + pad, W + pad, top + pad)}, {"walls", "slip"}};
   json bnd = json::array();
   if (!apron) bnd.push_back(plane("back_wall", at(0, 0, 0), at(1, 0, 0)));
@@ -415,7 +417,12 @@ void expand_basin(json& root, Basin& B, const std::string& file, int dim) {
       bnd.push_back(plane("far_side_wall", at(0, W, 0), at(0, -1, 0)));
     }
   }
-  if (!apron) bnd.push_back(box("gate", Lr, Lg, -pad, W + pad, B.gate_height_m, top + 2 * pad));
+  if (!apron) {
+    // The gate's lower edge, whose height campaigns and calibrations vary, acts below a cell (mpm::subcell_cover).
+    json gate = box("gate", Lr, Lg, -pad, W + pad, B.gate_height_m, top + 2 * pad);
+    gate["subcell_axes"] = json::array({dim - 1});
+    bnd.push_back(gate);
+  }
   bnd.push_back(box("quay", B.quay_x_m, L + 2 * pad, -pad, W + pad, -2 * pad, B.apron_height_m));
   // Obstacles: 0.10 m square columns, 5 across centred on the basin, rows 0.45 m apart.
   const int rows = B.obstacles_layout == "5x2" ? 2 : B.obstacles_layout == "5x1" ? 1 : 0;
@@ -630,6 +637,20 @@ Scene parse(const json& root_json, const std::string& file) {
                                                  {"symmetry", BoundaryCondition::kSymmetry}});
       b.friction = r.number("friction", 0.0, 0.0, 10.0);
       b.velocity = r.vec("velocity", dim, Vec3d{});
+      // Axes across which a box's faces act below a cell (mpm::subcell_cover), e.g. the gate's opening: [0..dim).
+      if (r.has("subcell_axes")) {
+        const json& axes = r.raw("subcell_axes");
+        const std::string allowed = "an array of axis indices in [0, " + std::to_string(dim - 1) + "]";
+        if (!axes.is_array()) r.fail("subcell_axes", "must be " + allowed);
+        for (const auto& a : axes) {
+          if (!a.is_number_integer() || a.get<int>() < 0 || a.get<int>() >= dim)
+            r.fail("subcell_axes", "must be " + allowed + " (got " + a.dump() + ")");
+          b.subcell_axes |= 1u << a.get<int>();
+        }
+      }
+      if (b.subcell_axes && b.shape.type != ShapeType::kBox) r.fail("subcell_axes", "applies to boxes only");
+      if (b.subcell_axes && b.condition == BoundaryCondition::kSticky)
+        r.fail("subcell_axes", "applies to slip and separate boundaries (sticky nodes have no partial rule)");
       if (b.condition == BoundaryCondition::kSymmetry) {
         // A mirror plane of the flow (mpm::SymmetryPlane): a fixed, frictionless, axis-aligned plane whose
         // reflection maps grid nodes onto grid nodes.

@@ -29,6 +29,7 @@ struct Boundary {
   BoundaryCondition condition = BoundaryCondition::kSeparate;
   double friction = 0.0;  // Coulomb coefficient for `separate`
   Vec3d velocity{};       // boundary velocity v_b of eq. 2
+  unsigned subcell_axes = 0;  // a box: the axes across which its faces act below a cell (mpm::subcell_cover)
 };
 
 // Water initially at rest, filling a box. With `hydrostatic`, it starts with the pressure rho g (surface - z)

@@ -103,6 +103,7 @@ struct Wall {
   T vb[D];
   int bc = 0;  // mpm::Bc
   T mu = 0;
+  unsigned subcell_axes = 0;  // mpm::subcell_cover
 };
 
 // Everything the kernels read, by value: raw device pointers and the scene's constants.
@@ -132,6 +133,7 @@ struct View {
   T* ghost_dv;            // D x nodes: a ghost's velocity before the walls, then its mirror's velocity change
   int32_t* ghost_wall;    // per node: the scene wall whose load takes the image's push, or -1
   unsigned push_axes;     // mpm::image_push_axes
+  double subcell_rate = 0;  // mpm::subcell_drag's rate0: the sound speed over a cell
   int has_sym = 0;        // a symmetry plane (mpm::SymmetryPlane): folded before the update, mirrored after
   mpm::SymmetryPlane sym;
   size_t nodes;
@@ -354,7 +356,23 @@ struct GridUpdate {
       if (static_cast<mpm::Bc>(w.bc) == mpm::Bc::kSymmetry) continue;  // not a wall (SymmetryFold)
       double n[2 * D][D];
       const int faces = mpm::wall_faces<D>(xn, w.box != 0, w.a, w.b, s.dx_d, n);
-      if (!faces) continue;
+      if (!faces) {
+        if (w.subcell_axes) {  // a node partly covered by a face between grid lines (MpmSolver::update_node)
+          double nearest[D];
+          const double cover = mpm::subcell_cover<D>(xn, w.a, w.b, s.dx_d, w.subcell_axes, nearest);
+          if (cover > 0) {
+            T before[D], held[D];
+            for (int d = 0; d < D; ++d) before[d] = held[d] = v[d];
+            const int nf = mpm::wall_faces<D>(nearest, w.box != 0, w.a, w.b, s.dx_d, n);
+            mpm::apply_wall<D>(held, n, nf, w.vb, static_cast<mpm::Bc>(w.bc), w.mu);
+            mpm::subcell_drag<D>(v, held, cover, s.subcell_rate, dt);
+            if (s.impulse)
+              for (int d = 0; d < D; ++d)
+                atomic_add(&s.impulse[k * D + d], load_weight * double(m) * (before[d] - v[d]));
+          }
+        }
+        continue;
+      }
       on_wall = 1;
       T before[D];
       for (int d = 0; d < D; ++d) before[d] = v[d];
@@ -856,6 +874,7 @@ class MpmCuda final : public Simulation {
       }
       w.bc = static_cast<int>(b.condition);
       w.mu = T(b.friction);
+      w.subcell_axes = b.subcell_axes;
       walls.push_back(w);
       if (b.condition == BoundaryCondition::kSymmetry) {
         has_sym_ = 1;
@@ -906,6 +925,7 @@ class MpmCuda final : public Simulation {
     s.law = mpm::TaitLaw<T>(K_, gamma_);
     s.push_axes = mpm::image_push_axes<D>(scene_.solver.gravity.data());
     s.has_sym = has_sym_;
+    s.subcell_rate = mpm::subcell_rate0(c_, dx_);
     s.sym = sym_;
     s.law_d = mpm::TaitLaw<double>(double(K_), double(gamma_));
     s.mu = mu_;
