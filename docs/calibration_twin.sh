@@ -10,7 +10,7 @@
 # Usage: docs/calibration_twin.sh [all|exp|global|fixed|table|resume ...]   (default: all)
 # Environment: FLUME (build/bin/flume), SCENE (scenes/waseda/waseda_2d.json), OUT (calibration-twin), DX (0.02),
 #   END_TIME (6, s simulated), WINDOW ("0, 6"), WORKERS (2: runs at once), THREADS (1: per run),
-#   TIME_LIMIT_S (3600 per run), RESUME_AFTER (10), STANDIN (0; 1: the `gauge` test stand-in model instead of
+#   TIME_LIMIT_S (3600 per run), RESUME_AFTER (10), XTOL (1e-4: xtol_abs of every optimizer), STANDIN (0; 1: the `gauge` test stand-in model instead of
 #   the scene, to check this script in minutes: its numbers say nothing about the flume).
 # Everything lands in $OUT: truth runs, target CSVs, one store (study.db), one folder per calibration with
 # calibration.json, fit.svg, profiles.svg, history.svg; summary.txt collects the numbers for the docs.
@@ -27,6 +27,7 @@ WORKERS=${WORKERS:-2}
 THREADS=${THREADS:-1}
 TIME_LIMIT_S=${TIME_LIMIT_S:-3600}
 RESUME_AFTER=${RESUME_AFTER:-10}
+XTOL=${XTOL:-1e-4}
 STANDIN=${STANDIN:-0}
 NOISE_M=0.002
 TRUE_T99=0.8
@@ -88,7 +89,7 @@ exp_spec() {  # $1: name
  "targets": [{"file": "$OUT/truth_exp.wg1.csv", "gauge": "WG1"}],
  "parameters": $(two_params 0.2 0.12),
  "objective": {"window": [$WINDOW]},
- "algorithm": {"name": "BOBYQA", "max_evaluations": 80, "xtol_abs": 1e-3},
+ "algorithm": {"name": "BOBYQA", "max_evaluations": 80, "xtol_abs": $XTOL},
  "profile": {"points": 3, "span": 0.1},
  "run": $RUN_SETTINGS}
 EOF
@@ -111,7 +112,7 @@ if want global; then
             {"reservoir.forcing.t99_s": 0.1, "reservoir.gate_height_m": 0.15}],
  "objective": {"window": [$WINDOW]},
  "algorithm": {"name": "CRS2_LM", "max_evaluations": 50, "polish": "BOBYQA", "polish_evaluations": 30,
-               "xtol_abs": 1e-3, "seed": 3},
+               "xtol_abs": $XTOL, "seed": 3},
  "profile": {"points": 0},
  "run": $RUN_SETTINGS}
 EOF
@@ -125,7 +126,7 @@ if want fixed; then
  "targets": [{"file": "$OUT/truth_exp.wg1.csv", "gauge": "WG1"}],
  "parameters": [{"path": "reservoir.forcing.t99_s", "lower": 0.05, "upper": 2.0, "start": 0.2}],
  "objective": {"window": [$WINDOW]},
- "algorithm": {"name": "SBPLX", "max_evaluations": 40, "xtol_abs": 1e-3},
+ "algorithm": {"name": "SBPLX", "max_evaluations": 40, "xtol_abs": $XTOL},
  "profile": {"points": 3, "span": 0.1},
  "run": $RUN_SETTINGS}
 EOF
@@ -136,7 +137,7 @@ EOF
  "targets": [{"file": "$OUT/truth_exp.wg1.csv", "gauge": "WG1"}],
  "parameters": [{"path": "reservoir.gate_height_m", "lower": 0.04, "upper": 0.16, "start": 0.12}],
  "objective": {"window": [$WINDOW]},
- "algorithm": {"name": "SBPLX", "max_evaluations": 40, "xtol_abs": 1e-3},
+ "algorithm": {"name": "SBPLX", "max_evaluations": 40, "xtol_abs": $XTOL},
  "profile": {"points": 3, "span": 0.1},
  "run": $RUN_SETTINGS}
 EOF
@@ -158,7 +159,7 @@ if want table; then
  "targets": [{"file": "$OUT/truth_table.wg1.csv", "gauge": "WG1"}],
  "parameters": [$params],
  "objective": {"window": [$WINDOW]},
- "algorithm": {"name": "BOBYQA", "max_evaluations": 200, "xtol_abs": 1e-3},
+ "algorithm": {"name": "BOBYQA", "max_evaluations": 80, "xtol_abs": $XTOL},
  "profile": {"points": 2, "span": 0.1},
  "run": $RUN_SETTINGS}
 EOF

@@ -150,6 +150,18 @@ struct View {
   T domain_mu;
   double* impulse;  // walls x D, or null when no load cell reads it
 
+  // Global node coordinates of grid index idx.
+  FLUME_HD void node_of(size_t idx, int* node) const {
+    int blk[D];
+    unpack_key<D>(gkeys[idx / kNodes], blk);
+    for (int d = D - 1, r = static_cast<int>(idx % kNodes); d >= 0; --d, r /= kBlock)
+      node[d] = blk[d] * kBlock + r % kBlock;
+  }
+
+  // Where node idx lies against the symmetry plane (`side`: mpm::symmetry_side) and, beyond it, the grid index
+  // of its mirror (-1 where no block holds it, or not beyond).
+  FLUME_HD int64_t symmetry_mirror(size_t idx, int& side) const;
+
   // Grid index of node `node` (global node coordinates) by a binary search of the sorted grid blocks; -1 where
   // no block holds it.
   FLUME_HD int64_t grid_index(const int* node) const {
@@ -273,23 +285,26 @@ struct P2G {
 // beyond the plane adds its reflection to its mirror, a node on the plane its own. A mirror has one node beyond
 // the plane, and no node both reads and is written, so no atomics are needed.
 template <int D, typename T>
+FLUME_HD int64_t View<D, T>::symmetry_mirror(size_t idx, int& side) const {
+  int node[D];
+  node_of(idx, node);
+  side = mpm::symmetry_side(sym, node[sym.axis]);
+  if (side <= 0) return -1;
+  node[sym.axis] = sym.twice - node[sym.axis];
+  return grid_index(node);
+}
+template <int D, typename T>
 struct SymmetryFold {
   View<D, T> s;
   FLUME_HD void operator()(size_t idx) const {
-    constexpr int kNodes = View<D, T>::kNodes;
-    int blk[D], node[D];
-    unpack_key<D>(s.gkeys[idx / kNodes], blk);
-    for (int d = D - 1, r = static_cast<int>(idx % kNodes); d >= 0; --d, r /= kBlock)
-      node[d] = blk[d] * kBlock + r % kBlock;
-    const int side = mpm::symmetry_side(s.sym, node[s.sym.axis]);
+    int side;
+    const int64_t mi = s.symmetry_mirror(idx, side);
     if (side < 0 || !(s.grid[idx] > T(0))) return;
     if (side == 0) {
       for (int c = 0; c < View<D, T>::kChannels; ++c)
         s.grid[c * s.nodes + idx] += T(mpm::symmetry_channel_sign(s.sym, c)) * s.grid[c * s.nodes + idx];
       return;
     }
-    node[s.sym.axis] = s.sym.twice - node[s.sym.axis];
-    const int64_t mi = s.grid_index(node);
     if (mi < 0) return;
     for (int c = 0; c < View<D, T>::kChannels; ++c)
       s.grid[c * s.nodes + mi] += T(mpm::symmetry_channel_sign(s.sym, c)) * s.grid[c * s.nodes + idx];
@@ -300,14 +315,9 @@ template <int D, typename T>
 struct SymmetryMirror {
   View<D, T> s;
   FLUME_HD void operator()(size_t idx) const {
-    constexpr int kNodes = View<D, T>::kNodes;
-    int blk[D], node[D];
-    unpack_key<D>(s.gkeys[idx / kNodes], blk);
-    for (int d = D - 1, r = static_cast<int>(idx % kNodes); d >= 0; --d, r /= kBlock)
-      node[d] = blk[d] * kBlock + r % kBlock;
-    if (mpm::symmetry_side(s.sym, node[s.sym.axis]) <= 0) return;
-    node[s.sym.axis] = s.sym.twice - node[s.sym.axis];
-    const int64_t mi = s.grid_index(node);
+    int side;
+    const int64_t mi = s.symmetry_mirror(idx, side);
+    if (side <= 0) return;
     for (int c = 0; c < View<D, T>::kChannels; ++c)
       s.grid[c * s.nodes + idx] = mi < 0 ? T(0) : T(mpm::symmetry_channel_sign(s.sym, c)) * s.grid[c * s.nodes + mi];
     s.gwall[idx] = mi < 0 ? 0 : s.gwall[mi];
@@ -321,7 +331,6 @@ struct GridUpdate {
   View<D, T> s;
   T dt;
   FLUME_HD void operator()(size_t idx) const {
-    constexpr int kNodes = View<D, T>::kNodes;
     const T m = s.grid[idx];
     if (m <= T(0)) {
       for (int c = 0; c < View<D, T>::kChannels; ++c) s.grid[c * s.nodes + idx] = T(0);
@@ -329,10 +338,8 @@ struct GridUpdate {
       s.ghost_mirror[idx] = -1;
       return;
     }
-    int blk[D], node[D];
-    unpack_key<D>(s.gkeys[idx / kNodes], blk);
-    for (int d = D - 1, r = static_cast<int>(idx % kNodes); d >= 0; --d, r /= kBlock)
-      node[d] = blk[d] * kBlock + r % kBlock;
+    int node[D];
+    s.node_of(idx, node);
     // Beyond the symmetry plane: the mirror of its reflection, once that is updated (SymmetryMirror).
     const int sym_side = s.has_sym ? mpm::symmetry_side(s.sym, node[s.sym.axis]) : -1;
     if (sym_side > 0) {
@@ -461,13 +468,9 @@ struct GhostMirrorUpdate {
     const int wall = s.ghost_wall[idx];
     double load_weight = 1;  // 1/2 on a symmetry plane (GridUpdate)
     if (s.has_sym && s.impulse && wall >= 0) {
-      constexpr int kNodes = View<D, T>::kNodes;
-      int blk[D];
-      unpack_key<D>(s.gkeys[idx / kNodes], blk);
-      int r = static_cast<int>(idx % kNodes), i = 0;
-      for (int d = D - 1; d >= 0; --d, r /= kBlock)
-        if (d == s.sym.axis) i = blk[d] * kBlock + r % kBlock;
-      if (mpm::symmetry_side(s.sym, i) == 0) load_weight = 0.5;
+      int node[D];
+      s.node_of(idx, node);
+      if (mpm::symmetry_side(s.sym, node[s.sym.axis]) == 0) load_weight = 0.5;
     }
     for (int d = 0; d < D; ++d) {
       atomic_add(&s.grid[(1 + d) * s.nodes + mi], s.ghost_dv[d * s.nodes + idx]);

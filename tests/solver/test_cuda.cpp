@@ -28,6 +28,7 @@
 #include "solver/cuda/mpm_cuda.h"
 #include "solver/scene.h"
 #include "solver/simulation.h"
+#include "symmetric_tank.h"
 #include "test_util.h"
 
 namespace flume {
@@ -104,26 +105,11 @@ Scene martin_moyce(double dx, const std::string& precision) {
                      {"instruments.snapshot_rate_hz", "0"}});
 }
 
-// Half a dam break in a 3D tank with a symmetry plane at y = 0.2 m (tests/solver/test_symmetry.cpp) and a column
-// across it, with a load cell on the column: the fold, the mirror beyond the plane and the particles' images.
+// Half a dam break in a 3D tank with a symmetry plane at y = 0.2 m midway between grid lines (symmetric_tank.h)
+// and a column across it, with a load cell on the column: the fold, the mirror beyond the plane and the
+// particles' images.
 Scene half_tank(double end_time) {
-  const std::string text = R"({
-    "name": "half_tank", "dimension": 3,
-    "domain": {"lo": [-0.06, -0.05, -0.06], "hi": [0.66, 0.26, 0.5], "walls": "slip"},
-    "solver": {"dx": 0.02, "ppc": 8, "cfl": 0.4, "precision": "double", "end_time": )" +
-                           std::to_string(end_time) + R"(},
-    "fluid": {"bulk_modulus": 2e5, "jbar_psi": 0.9},
-    "boundaries": [
-      {"name": "floor", "type": "half_space", "point": [0, 0, 0], "normal": [0, 0, 1], "condition": "slip"},
-      {"name": "back", "type": "half_space", "point": [0, 0, 0], "normal": [1, 0, 0], "condition": "slip"},
-      {"name": "end", "type": "half_space", "point": [0.6, 0, 0], "normal": [-1, 0, 0], "condition": "slip"},
-      {"name": "side", "type": "half_space", "point": [0, 0, 0], "normal": [0, 1, 0], "condition": "slip"},
-      {"name": "plane", "type": "half_space", "point": [0, 0.2, 0], "normal": [0, -1, 0], "condition": "symmetry"},
-      {"name": "column", "type": "box", "lo": [0.3, 0.17, -0.1], "hi": [0.35, 0.23, 0.6], "condition": "slip"}],
-    "water": [{"lo": [0, 0, 0], "hi": [0.2, 0.2, 0.3]}],
-    "instruments": {"loads": [{"name": "floor", "boundary": "column", "rate_hz": 100}]}
-  })";
-  return parse_scene_text(text, "half_tank.json");
+  return parse_scene_text(test::symmetric_tank(true, "symmetry", -0.05, end_time, 0.3), "half_tank.json");
 }
 
 // What two backends' runs of one scene differ by.

@@ -15,36 +15,14 @@
 #include "common/errors.h"
 #include "solver/scene.h"
 #include "solver/simulation.h"
+#include "symmetric_tank.h"
 #include "test_util.h"
 
 namespace flume {
 namespace {
 
-// A dam break in a 3D tank, y across, mirror-symmetric about y = 0.2 m: the water fills the tank's width, and a
-// column stands across the centreline downstream. `span`: "full", or the half y <= 0.2 m closed by `plane`
-// (symmetry or slip). `y_lo`: the domain's lower y, which decides whether the plane lies on a grid line (-0.06:
-// 13 cells) or midway between two (-0.05: 12.5 cells).
 std::string tank(const std::string& span, const std::string& plane, double y_lo) {
-  const bool half = span != "full";
-  const double y_hi = half ? 0.26 : 0.46, water_hi = half ? 0.2 : 0.4, column_hi = 0.23;
-  char text[4096];
-  std::snprintf(text, sizeof text, R"({
-    "name": "tank", "dimension": 3,
-    "domain": {"lo": [-0.06, %g, -0.06], "hi": [0.66, %g, 0.5], "walls": "slip"},
-    "solver": {"dx": 0.02, "ppc": 8, "cfl": 0.4, "precision": "double", "end_time": 0.3},
-    "fluid": {"bulk_modulus": 2e5, "jbar_psi": 0.9},
-    "boundaries": [
-      {"name": "floor", "type": "half_space", "point": [0, 0, 0], "normal": [0, 0, 1], "condition": "slip"},
-      {"name": "back", "type": "half_space", "point": [0, 0, 0], "normal": [1, 0, 0], "condition": "slip"},
-      {"name": "end", "type": "half_space", "point": [0.6, 0, 0], "normal": [-1, 0, 0], "condition": "slip"},
-      {"name": "side", "type": "half_space", "point": [0, 0, 0], "normal": [0, 1, 0], "condition": "slip"},
-      {"name": "%s", "type": "half_space", "point": [0, %g, 0], "normal": [0, -1, 0], "condition": "%s"},
-      {"name": "column", "type": "box", "lo": [0.4, 0.17, -0.1], "hi": [0.45, %g, 0.6], "condition": "slip"}],
-    "water": [{"lo": [0, 0, 0], "hi": [0.2, %g, 0.3]}]
-  })",
-                y_lo, y_hi, half ? "plane" : "far_side", half ? 0.2 : 0.4, half ? plane.c_str() : "slip", column_hi,
-                water_hi);
-  return text;
+  return test::symmetric_tank(span != "full", plane, y_lo, 0.3);
 }
 
 struct State {
