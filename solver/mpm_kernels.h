@@ -436,7 +436,7 @@ FLUME_HD void ghost_exchange(const T* vg, const T* vg_pre, T mg, const T* vm, T 
 }
 
 // The axes along which walls push with their ghosts' image: those gravity has no component along (side walls,
-// symmetry planes, the gate and quay faces), not floors. The image is the mirror image of the pressure, right
+// the gate and quay faces; a symmetry plane is no wall, SymmetryPlane), not floors. The image is the mirror image of the pressure, right
 // where the pressure is locally even about the wall; a floor carries the hydrostatic gradient across it, and
 // there the push was measured to do harm: the bore over the Waseda apron, a sheet one or two cells thick on a
 // floor, reached WG4 0.4 s later and the apron-only run fed from it missed WG4 by 14 % RMS (7 % without the
