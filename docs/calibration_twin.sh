@@ -111,7 +111,7 @@ if want global; then
  "starts": [{"reservoir.forcing.t99_s": 1.8, "reservoir.gate_height_m": 0.05},
             {"reservoir.forcing.t99_s": 0.1, "reservoir.gate_height_m": 0.15}],
  "objective": {"window": [$WINDOW]},
- "algorithm": {"name": "CRS2_LM", "max_evaluations": 40, "polish": "BOBYQA", "polish_evaluations": 20,
+ "algorithm": {"name": "CRS2_LM", "max_evaluations": 40, "polish": "BOBYQA", "polish_evaluations": 40,
                "xtol_abs": $XTOL, "seed": 3},
  "profile": {"points": 0},
  "run": $RUN_SETTINGS}
