@@ -631,7 +631,7 @@ class MpmSolver final : public Simulation {
     for (int d = 0; d < D; ++d) xn[d] = grid_lo_[d] + node[d] * dx_;
     for (uint32_t q = g_bnd_start_[g]; q < g_bnd_start_[g + 1]; ++q) {
       const Wall& w = walls_[g_bnd_[q]];
-      if (w.bc == mpm::Bc::kSymmetry) continue;  // not a wall (fold_symmetry)
+      if (w.bc == mpm::Bc::kSymmetry) continue;  // not a wall (the fold in grid_update)
       double n[2 * D][D];
       const int faces = mpm::wall_faces<D>(xn, w.box, w.ad, w.bd, dx_, n);
       if (!faces) {
@@ -724,15 +724,13 @@ class MpmSolver final : public Simulation {
     std::vector<double> impulse(static_cast<size_t>(nthreads) * walls_.size() * D, 0.0);
     if (debris_) coupling_.assign(nthreads, {});
     ghosts_.resize(nthreads);
-    deferred_lists_.resize(nthreads);
+    if (has_sym_) index_symmetry_blocks();
 #pragma omp parallel
     {
       double* my_impulse = impulse.data() + static_cast<size_t>(omp_get_thread_num()) * walls_.size() * D;
       std::vector<CouplingNode>* my_coupling = debris_ ? &coupling_[omp_get_thread_num()] : nullptr;
       std::vector<Ghost>* my_ghosts = &ghosts_[omp_get_thread_num()];
       my_ghosts->clear();
-      std::vector<Deferred>* my_deferred = &deferred_lists_[omp_get_thread_num()];
-      my_deferred->clear();
 #pragma omp for schedule(dynamic, 8)
       for (long g = 0; g < ngb; ++g) {
         Lane acc[kNodes];
@@ -786,30 +784,44 @@ class MpmSolver final : public Simulation {
             near_debris = r2 <= reach * reach;
           }
         }
+        const int slot = has_sym_ ? sym_slot_[g] : -1;
+        if (slot >= 0) sym_near_[slot] = near_debris;
         for (int k = 0; k < kNodes; ++k) {
           int node[D];
           for (int d = D - 1, r = k; d >= 0; --d, r /= kBlock) node[d] = blk[d] * kBlock + r % kBlock;
-          if (has_sym_ && in_symmetry_zone(node)) {  // folded across the plane first, updated after
-            my_deferred->push_back({g, base + k, {}, acc[k], near_debris, -1});
-            for (int d = 0; d < D; ++d) my_deferred->back().node[d] = node[d];
+          if (slot >= 0 && in_symmetry_zone(node[sym_.axis])) {  // folded across the plane first, updated after
+            sym_acc_[static_cast<size_t>(slot) * kNodes + k] = acc[k];
             continue;
           }
           update_node(acc[k], g, base + k, node, near_debris, 1.0, dt, inv_cell_volume, my_impulse, my_coupling, my_ghosts);
         }
       }
       if (has_sym_) {
-#pragma omp single
-        fold_symmetry();
-        // The nodes on the modelled side and on the plane, now holding what the whole would give them; a load on
-        // the plane is half the whole's.
-        const long nd = static_cast<long>(deferred_.size());
+        // After the barrier every raw node near the plane is stored. The nodes on the modelled side and on the
+        // plane take their fold (what the whole would give them) and are updated; a load on the plane is half
+        // the whole's. Each reads its own entry and its mirror's beyond the plane, which nobody writes.
+        Lane sign;
+        for (int c = 0; c < kLanes; ++c) sign[c] = T(mpm::symmetry_channel_sign(sym_, c));
+        const long nq = static_cast<long>(sym_blocks_.size()) * kNodes;
 #pragma omp for schedule(static)
-        for (long q = 0; q < nd; ++q) {
-          const Deferred& e = deferred_[q];
-          const int side = mpm::symmetry_side(sym_, e.node[sym_.axis]);
-          if (side > 0) continue;
-          update_node(e.acc, e.block, e.idx, e.node, e.near_debris, side == 0 ? 0.5 : 1.0, dt, inv_cell_volume, my_impulse, my_coupling,
-                      my_ghosts);
+        for (long q = 0; q < nq; ++q) {
+          const long g = sym_blocks_[q / kNodes];
+          const int k = static_cast<int>(q % kNodes);
+          int blk[D], node[D];
+          unpack_key<D>(gkeys_[g], blk);
+          for (int d = D - 1, r = k; d >= 0; --d, r /= kBlock) node[d] = blk[d] * kBlock + r % kBlock;
+          if (!in_symmetry_zone(node[sym_.axis])) continue;  // updated in the loop above
+          const int side = mpm::symmetry_side(sym_, node[sym_.axis]);
+          if (side > 0) continue;  // beyond: mirrored after the walls (mirror_beyond_symmetry)
+          Lane a = sym_acc_[q];
+          if (side == 0) {
+            a += sign * a;
+          } else {
+            const long m = symmetry_entry(node);
+            if (m >= 0) a += sign * sym_acc_[m];
+          }
+          update_node(a, g, static_cast<size_t>(g) * kNodes + k, node, sym_near_[q / kNodes] != 0, side == 0 ? 0.5 : 1.0,
+                      dt, inv_cell_volume, my_impulse, my_coupling, my_ghosts);
         }
       }
     }
@@ -822,20 +834,28 @@ class MpmSolver final : public Simulation {
   }
 
   // The symmetry plane (mpm::SymmetryPlane). A node within kSymmetryZone cells of it on the modelled side, on it
-  // or beyond it is updated after the fold; the particles stay on the modelled side, so only nodes one cell
-  // beyond it receive mass, and their mirrors lie within the zone.
+  // or beyond it is stored raw and updated after the fold; the particles stay on the modelled side, so only nodes
+  // one cell beyond it receive mass, and their mirrors lie within the zone. The blocks holding such nodes get a
+  // slot each (sym_slot_), their raw nodes a dense entry (slot * kNodes + local): no list to gather or sort.
   static constexpr int kSymmetryZone = 3;
-  struct Deferred {
-    long block = 0;
-    size_t idx = 0;
-    int node[D] = {};
-    Lane acc;
-    bool near_debris = false;
-    long mirror = -1;  // beyond the plane: the entry of its mirror node
-  };
-  bool in_symmetry_zone(const int* node) const {
-    const int i = node[sym_.axis];
+  bool in_symmetry_zone(int i) const {
     return mpm::symmetry_side(sym_, i) >= 0 || std::abs(2 * i - sym_.twice) <= 2 * kSymmetryZone;
+  }
+  void index_symmetry_blocks() {
+    const long ngb = static_cast<long>(gkeys_.size());
+    sym_slot_.assign(gkeys_.size(), -1);
+    sym_blocks_.clear();
+    for (long g = 0; g < ngb; ++g) {
+      int blk[D];
+      unpack_key<D>(gkeys_[g], blk);
+      bool touches = false;
+      for (int l = 0; l < kBlock && !touches; ++l) touches = in_symmetry_zone(blk[sym_.axis] * kBlock + l);
+      if (!touches) continue;
+      sym_slot_[g] = static_cast<int>(sym_blocks_.size());
+      sym_blocks_.push_back(g);
+    }
+    sym_acc_.resize(sym_blocks_.size() * kNodes);
+    sym_near_.assign(sym_blocks_.size(), 0);
   }
   // Grid index of a node (global node coordinates), or -1 where no active block holds it.
   long grid_index(const int* node) const {
@@ -849,52 +869,44 @@ class MpmSolver final : public Simulation {
     if (it == gkeys_.end() || *it != pack_key<D>(blk)) return -1;
     return static_cast<long>(it - gkeys_.begin()) * kNodes + local;
   }
-  // Folds the nodes beyond the plane onto their mirrors (their reflection added) and each node on the plane
-  // onto itself, in the raw lanes, before any of them is updated. Serial: a few layers of nodes.
-  void fold_symmetry() {
-    deferred_.clear();
-    for (const auto& list : deferred_lists_) deferred_.insert(deferred_.end(), list.begin(), list.end());
-    std::sort(deferred_.begin(), deferred_.end(), [](const Deferred& a, const Deferred& b) { return a.idx < b.idx; });
-    Lane sign;
-    for (int c = 0; c < kLanes; ++c) sign[c] = T(mpm::symmetry_channel_sign(sym_, c));
-    const auto entry = [&](size_t idx) -> long {
-      const auto it = std::lower_bound(deferred_.begin(), deferred_.end(), idx,
-                                       [](const Deferred& e, size_t i) { return e.idx < i; });
-      return it != deferred_.end() && it->idx == idx ? static_cast<long>(it - deferred_.begin()) : -1;
-    };
-    for (auto& e : deferred_) {
-      const int side = mpm::symmetry_side(sym_, e.node[sym_.axis]);
-      if (side == 0) {
-        e.acc += sign * e.acc;
-      } else if (side > 0) {
-        int mirror[D];
-        for (int d = 0; d < D; ++d) mirror[d] = e.node[d];
-        mirror[sym_.axis] = sym_.twice - e.node[sym_.axis];
-        const long gi = grid_index(mirror);
-        e.mirror = gi >= 0 ? entry(static_cast<size_t>(gi)) : -1;
-        if (e.mirror >= 0) deferred_[e.mirror].acc += sign * e.acc;
-      }
-    }
+  // The raw entry of a node's mirror across the plane, or -1 where the mirror is outside the zone or no active
+  // block holds it.
+  long symmetry_entry(const int* node) const {
+    int mirror[D];
+    for (int d = 0; d < D; ++d) mirror[d] = node[d];
+    mirror[sym_.axis] = sym_.twice - node[sym_.axis];
+    if (!in_symmetry_zone(mirror[sym_.axis])) return -1;
+    const long gi = grid_index(mirror);
+    if (gi < 0) return -1;
+    const int slot = sym_slot_[gi / kNodes];
+    return slot >= 0 ? static_cast<long>(slot) * kNodes + gi % kNodes : -1;
   }
-  // After the walls and the ghosts: every node beyond the plane is the reflection of its mirror.
+  // After the walls and the ghosts: every node beyond the plane is the reflection of its mirror; one whose mirror
+  // lies outside the zone (more than kSymmetryZone cells beyond, no mass) is emptied.
   void mirror_beyond_symmetry() {
-    const long nd = static_cast<long>(deferred_.size());
+    const long nq = static_cast<long>(sym_blocks_.size()) * kNodes;
 #pragma omp parallel for schedule(static)
-    for (long q = 0; q < nd; ++q) {
-      const Deferred& e = deferred_[q];
-      if (mpm::symmetry_side(sym_, e.node[sym_.axis]) <= 0) continue;
-      if (e.mirror < 0) {  // nothing on the modelled side within reach: no water here either
-        gm_[e.idx] = ge_[e.idx] = gfill_[e.idx] = T(0);
-        gwall_[e.idx] = 0;
-        for (int d = 0; d < D; ++d) gv_[d][e.idx] = T(0);
+    for (long q = 0; q < nq; ++q) {
+      const long g = sym_blocks_[q / kNodes];
+      const int k = static_cast<int>(q % kNodes);
+      int blk[D], node[D];
+      unpack_key<D>(gkeys_[g], blk);
+      for (int d = D - 1, r = k; d >= 0; --d, r /= kBlock) node[d] = blk[d] * kBlock + r % kBlock;
+      if (mpm::symmetry_side(sym_, node[sym_.axis]) <= 0) continue;
+      const size_t idx = static_cast<size_t>(g) * kNodes + k;
+      const long m = symmetry_entry(node);
+      if (m < 0) {  // nothing on the modelled side within reach: no water here either
+        gm_[idx] = ge_[idx] = gfill_[idx] = T(0);
+        gwall_[idx] = 0;
+        for (int d = 0; d < D; ++d) gv_[d][idx] = T(0);
         continue;
       }
-      const size_t mi = deferred_[e.mirror].idx;
-      gm_[e.idx] = gm_[mi];
-      ge_[e.idx] = ge_[mi];
-      gfill_[e.idx] = gfill_[mi];
-      gwall_[e.idx] = gwall_[mi];
-      for (int d = 0; d < D; ++d) gv_[d][e.idx] = T(mpm::symmetry_channel_sign(sym_, 1 + d)) * gv_[d][mi];
+      const size_t mi = static_cast<size_t>(sym_blocks_[m / kNodes]) * kNodes + m % kNodes;
+      gm_[idx] = gm_[mi];
+      ge_[idx] = ge_[mi];
+      gfill_[idx] = gfill_[mi];
+      gwall_[idx] = gwall_[mi];
+      for (int d = 0; d < D; ++d) gv_[d][idx] = T(mpm::symmetry_channel_sign(sym_, 1 + d)) * gv_[d][mi];
     }
   }
 
@@ -1323,8 +1335,10 @@ class MpmSolver final : public Simulation {
   std::vector<T> tag_;  // the inflow's buffer particles (1) and free water (0); empty without an inflow
   std::vector<std::vector<Ghost>> ghosts_;  // per thread: this step's ghost nodes (reflect_ghosts)
   std::vector<Ghost> all_ghosts_;            // all of them, in node order
-  std::vector<std::vector<Deferred>> deferred_lists_;  // per thread: this step's nodes near the symmetry plane
-  std::vector<Deferred> deferred_;                     // all of them, in node order (fold_symmetry)
+  std::vector<int> sym_slot_;     // per grid block: its slot among the blocks near the symmetry plane, or -1
+  std::vector<long> sym_blocks_;  // per slot: the grid block
+  std::vector<Lane> sym_acc_;     // per slot and local node: this step's raw lanes (updated after the fold)
+  std::vector<char> sym_near_;    // per slot: the block is near a debris body
   bool has_sym_ = false;
   mpm::SymmetryPlane sym_;
   struct MirrorChange {
