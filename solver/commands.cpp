@@ -26,6 +26,7 @@ struct Args {
   SimulationOptions options;
   long steps = 0;
   bool quiet = false;
+  CheckpointOptions checkpoints;
 };
 
 int parse_int(const char* flag, const char* text, long lo, long hi) {
@@ -65,6 +66,15 @@ Args parse_args(int argc, char** argv, bool need_out, bool need_steps) {
       } else {
         throw InputError("--backend", "", "must be cpu or cuda (got '" + b + "')");
       }
+    } else if (s == "--checkpoint-every") {
+      const char* text = value("--checkpoint-every");
+      char* end = nullptr;
+      const double v = std::strtod(text, &end);
+      if (*end || !(v >= 1 && v <= 1e7))
+        throw InputError("--checkpoint-every", "", std::string("expects wall-clock seconds in [1, 1e7] (got '") + text + "')");
+      a.checkpoints.every_s = v;
+    } else if (s == "--resume") {
+      a.checkpoints.resume = true;
     } else if (s == "--quiet" || s == "-q") {
       a.quiet = true;
     } else if (!s.empty() && s[0] == '-') {
@@ -100,7 +110,7 @@ int run_main(int argc, char** argv) {
   return guarded("run", [&] {
     const Args a = parse_args(argc, argv, true, false);
     const Scene scene = load_scene(a.scene, a.sets);
-    const RunOutcome r = run_scene(scene, a.options, a.out, !a.quiet);
+    const RunOutcome r = run_scene(scene, a.options, a.out, !a.quiet, a.checkpoints);
     std::fprintf(stderr, "flume run: %s: %s (%ld steps, %zu particles, %.1f s, %.3g particle-steps/s)\n",
                  r.status == RunStatus::kOk ? "ok" : "unstable", r.message.c_str(), r.cost.steps, r.cost.particles,
                  r.cost.wall_s, r.cost.particle_steps_per_s);

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "common/errors.h"
+#include "solver/checkpoint.h"
 
 namespace flume {
 namespace {
@@ -139,6 +140,14 @@ void DebrisCoupling::add_particle_impulse(int body, const double impulse[3], con
                           world_.box_view(body).centre[2]);
   pending_[body].head<3>() += J;
   pending_[body].tail<3>() += L - c.cross(J);  // about the centre
+}
+
+void DebrisCoupling::checkpoint(StateArchive& ar) {
+  ar.section("debris");
+  world_.checkpoint(ar);
+  recorder_->checkpoint(ar);
+  ar(water_force_);
+  ar(pending_);
 }
 
 double DebrisCoupling::energy() const {

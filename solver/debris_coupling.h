@@ -78,6 +78,9 @@ class DebrisCoupling {
 
   void finish() { recorder_->finish(); }
 
+  // The boxes, their recorded trajectories and the loads pending for the next exchange (solver/checkpoint.h).
+  void checkpoint(StateArchive& ar);
+
  private:
   RigidWorld world_;
   std::unique_ptr<DebrisRecorder> recorder_;

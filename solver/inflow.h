@@ -198,6 +198,16 @@ class InflowBoundary {
     return out;
   }
 
+  // The lattice lines' advance and error carries, and the masses in and out (solver/checkpoint.h).
+  void checkpoint(StateArchive& ar) {
+    ar.section("inflow");
+    ar.expect("inflow lines", phi_.size());
+    ar(phi_);
+    ar(carry_);
+    ar(injected_);
+    ar(absorbed_);
+  }
+
   double injected_mass() const { return injected_; }  // kg (kg/m in 2D) that entered through x_in
   double absorbed_mass() const { return absorbed_; }  // kg that left upstream through x_in
   // An energy scale for the solver's audit: 1% of the potential energy of the recorded inflow's volume

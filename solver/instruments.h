@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "solver/scene.h"
+#include "solver/checkpoint.h"
 #include "solver/simulation.h"
 
 namespace flume {
@@ -139,6 +140,20 @@ class InstrumentSet {
   }
 
   const Record& record() const { return record_; }
+
+  // The record so far and when each instrument samples next (solver/checkpoint.h).
+  void checkpoint(StateArchive& ar) {
+    ar.section("instruments");
+    ar(record_);
+    for (auto* clocks : {&gauges_, &probes_, &loads_, &sections_}) {
+      ar.expect("instruments", clocks->size());
+      for (Clock& c : *clocks) ar(c.next);
+    }
+    ar.expect("instruments.loads", load_impulse_.size());
+    for (auto& li : load_impulse_) ar(li);
+    ar(load_since_);
+    ar(next_diag_);
+  }
 
   // Accumulates the impulse the water gave each load-cell boundary over the last step.
   void add_impulses(const std::vector<double>& impulse_per_wall, double /*dt*/) {

@@ -21,6 +21,7 @@
 #include <Eigen/Core>
 
 #include "common/errors.h"
+#include "solver/checkpoint.h"
 #include "solver/debris_coupling.h"
 #include "solver/inflow.h"
 #include "solver/instruments.h"
@@ -247,6 +248,57 @@ class MpmSolver final : public Simulation {
   const DebrisCoupling* debris() const override { return debris_.get(); }
   DebrisCoupling* debris() override { return debris_.get(); }
 
+  // Everything a step reads that an earlier step wrote: the particles, the clock, the step-size control, the
+  // energy audit, the instruments, the inflow and the debris, and the block each particle was last sorted into.
+  // The block lists and the grid are rebuilt from those, so a resumed run repeats the uninterrupted one step
+  // for step, to the bit.
+  void checkpoint(StateArchive& ar) override {
+    ar.section(std::string("mpm ") + std::to_string(D) + "D " + (sizeof(T) == 4 ? "float" : "double"));
+    for (int d = 0; d < D; ++d) {
+      ar(x_[d]);
+      ar(v_[d]);
+    }
+    for (auto& c : C_) ar(c);
+    ar(e_);
+    ar(vol_);
+    ar(held_);
+    ar(tag_);
+    ar(time_);
+    ar(dt_);
+    ar(max_speed_);
+    ar(steps_);
+    ar(energy0_);
+    ar(energy_slack_);
+    ar(last_energy_);
+    ar(mass_);
+    ar(status_);
+    ar(message_);
+    // The block each particle was sorted into: between sorts a particle may drift into the next block's tile
+    // margin without a re-sort, so its block is not a function of its position.
+    ar(needs_sort_);
+    ar(sort_key_);
+    instruments_.checkpoint(ar);
+    ar.expect("inflow", inflow_ ? 1 : 0);
+    if (inflow_) inflow_->checkpoint(ar);
+    ar.expect("debris", debris_ ? 1 : 0);
+    if (debris_) debris_->checkpoint(ar);
+    if (ar.loading()) {
+      n_ = x_[0].size();
+      const auto bad = [&](const std::vector<T>& a) { return a.size() != n_; };
+      bool mismatch = bad(e_) || bad(vol_) || (!held_.empty() && bad(held_)) || (!tag_.empty() && bad(tag_));
+      for (int d = 0; d < D; ++d) mismatch = mismatch || bad(x_[d]) || bad(v_[d]);
+      for (auto& c : C_) mismatch = mismatch || bad(c);
+      if (mismatch) ar.fail("particles", "particle arrays of different lengths");
+      if (status_ == RunStatus::kUnstable) ar.fail("status", "the checkpointed run had gone unstable");
+      // A finished run resumed to a later end time runs on.
+      status_ = time_ < scene_.solver.end_time - 1e-12 ? RunStatus::kRunning : RunStatus::kOk;
+      if (!needs_sort_) {
+        if (sort_key_.size() != n_) ar.fail("particles", "block keys for a different particle count");
+        build_blocks();
+      }
+    }
+  }
+
   // --- read access for the instruments ---
   int dim() const { return D; }
   size_t n() const { return n_; }
@@ -374,6 +426,13 @@ class MpmSolver final : public Simulation {
       for (size_t i = 0; i < n_; ++i) sorted[i] = key[order[i]];
       key.swap(sorted);
     }
+    build_blocks();
+  }
+
+  // The particle blocks, grid blocks and their neighbour and boundary lists, from the particles' block keys
+  // (sort_key_, in particle order) as the last sort assigned them.
+  void build_blocks() {
+    const std::vector<uint64_t>& key = sort_key_;
     // Particle blocks and their particle ranges.
     pkeys_.clear();
     pstart_.clear();

@@ -8,6 +8,7 @@
 
 #include "common/errors.h"
 #include "flume_version.h"
+#include "solver/checkpoint.h"
 #include "solver/debris_coupling.h"
 #include "solver/debris_metrics.h"
 #include "solver/run_output.h"
@@ -105,19 +106,47 @@ void add_snapshot(h5::RunFile& file, const Simulation& sim) {
 }  // namespace
 
 RunOutcome run_scene(const Scene& scene, const SimulationOptions& options, const std::string& out_dir,
-                     bool progress) {
+                     bool progress, const CheckpointOptions& checkpoints) {
   namespace fs = std::filesystem;
+  const bool checkpointing = checkpoints.every_s > 0 || checkpoints.resume;
+  if (checkpointing && scene.instruments.snapshot_rate_hz > 0)
+    throw InputError(scene.file, "instruments.snapshot_rate_hz",
+                     "a checkpointed or resumed run cannot keep snapshots yet (those before the checkpoint would "
+                     "be lost): set it to 0 or run without --checkpoint-every/--resume");
   std::error_code ec;
   fs::create_directories(out_dir, ec);
   if (ec) throw InputError(out_dir, "--out", "cannot create the output directory: " + ec.message());
   auto sim = make_simulation(scene, options);
+  const std::string ckpt_path = (fs::path(out_dir) / "checkpoint.bin").string();
+  const std::string scene_key = checkpointing ? checkpoint_scene_key(scene.source_json) : std::string();
+  double wall_before = 0;  // wall time of the segments before a resume
+  if (checkpoints.resume) {
+    StateArchive ar(read_checkpoint_file(ckpt_path, scene_key), ckpt_path);
+    ar.section("run");
+    ar(wall_before);
+    sim->checkpoint(ar);
+    ar.finish();
+    if (progress)
+      std::fprintf(stderr, "resumed from %s at t = %.3f s, step %ld\n", ckpt_path.c_str(), sim->time(), sim->steps());
+  }
   h5::RunFile file((fs::path(out_dir) / "result.h5").string());
   file.set_attribute("/", "status", "running");
 
   const double snap_period = scene.instruments.snapshot_rate_hz > 0 ? 1.0 / scene.instruments.snapshot_rate_hz : 0;
   double next_snap = 0;
   double next_report = 0;
+  while (next_report <= sim->time()) next_report += scene.solver.end_time / 10;
   const auto t0 = std::chrono::steady_clock::now();
+  auto last_ckpt = t0;
+  const auto save = [&] {
+    StateArchive ar;
+    ar.section("run");
+    double wall = wall_before + std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    ar(wall);
+    sim->checkpoint(ar);
+    write_checkpoint_file(ckpt_path, scene_key, ar.bytes());
+    last_ckpt = std::chrono::steady_clock::now();
+  };
   RunStatus status = RunStatus::kRunning;
   while (true) {
     if (snap_period > 0 && sim->time() + 1e-12 >= next_snap) {
@@ -129,13 +158,18 @@ RunOutcome run_scene(const Scene& scene, const SimulationOptions& options, const
     if (progress && sim->time() >= next_report) {
       std::fprintf(stderr, "t = %.3f s / %.3f s, step %ld, dt = %.3g s\n", sim->time(), scene.solver.end_time,
                    sim->steps(), sim->last_dt());
-      next_report += scene.solver.end_time / 10;
+      while (next_report <= sim->time()) next_report += scene.solver.end_time / 10;
     }
+    if (checkpoints.every_s > 0 &&
+        (status == RunStatus::kOk ||
+         (status == RunStatus::kRunning &&
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - last_ckpt).count() >= checkpoints.every_s)))
+      save();
   }
   RunOutcome out;
   out.status = status;
   out.message = status == RunStatus::kOk ? "completed" : sim->message();
-  out.cost.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  out.cost.wall_s = wall_before + std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   out.cost.steps = sim->steps();
   out.cost.particles = sim->particle_count();
   out.cost.particle_steps_per_s =

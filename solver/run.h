@@ -14,10 +14,19 @@ struct RunOutcome {
   Cost cost;
 };
 
+// Checkpoints of a run (solver/checkpoint.h): OUT_DIR/checkpoint.bin.
+struct CheckpointOptions {
+  double every_s = 0;   // > 0: write one every this many wall-clock seconds, and one at the end
+  bool resume = false;  // start from OUT_DIR/checkpoint.bin instead of t = 0
+};
+
 // Runs to scene.solver.end_time (or until unstable), writing OUT_DIR/result.h5 (+ result.xmf when there
 // are snapshots) and OUT_DIR/run.json. `progress` prints a line per simulated tenth of the run to stderr.
+// With checkpoints, a run killed at any point resumes from its last checkpoint (`resume`) and finishes as the
+// uninterrupted run would; a finished run resumes to a later end time. Scenes with snapshots are refused
+// (the snapshots before the checkpoint would be lost), as is the CUDA backend.
 RunOutcome run_scene(const Scene& scene, const SimulationOptions& options, const std::string& out_dir,
-                     bool progress = false);
+                     bool progress = false, const CheckpointOptions& checkpoints = {});
 
 // Writes the record of a simulation (series, diagnostics, attributes) into an open result file.
 namespace h5 { class RunFile; }

@@ -1,6 +1,7 @@
 #include "solver/simulation.h"
 
 #include "common/errors.h"
+#include "solver/checkpoint.h"
 
 namespace flume {
 
@@ -9,6 +10,38 @@ std::unique_ptr<Simulation> make_cpu_simulation(const Scene& scene, const Simula
 std::unique_ptr<Simulation> make_cuda_simulation(const Scene& scene, const SimulationOptions& options);
 bool cuda_device_present();
 #endif
+
+void Simulation::checkpoint(StateArchive& ar) {
+  throw InputError(ar.file().empty() ? std::string("--checkpoint-every") : ar.file(), "backend",
+                   "this backend does not checkpoint yet: run with --backend cpu");
+}
+
+void checkpoint_state(StateArchive& ar, TimeSeries& s) {
+  ar(s.components);
+  ar(s.time);
+  ar(s.values);
+}
+
+void checkpoint_state(StateArchive& ar, SectionSeries& s) {
+  ar(s.x_m);
+  ar(s.floor_m);
+  ar(s.bin_width_m);
+  ar(s.y);
+  ar(s.time);
+  ar(s.depth);
+  ar(s.velocity);
+  ar(s.z);
+  ar(s.profile);
+}
+
+void checkpoint_state(StateArchive& ar, Record& r) {
+  ar.section("record");
+  ar(r.gauges);
+  ar(r.probes);
+  ar(r.loads);
+  ar(r.sections);
+  ar(r.diagnostics);
+}
 
 bool cuda_available() {
 #ifdef FLUME_HAVE_CUDA

@@ -10,6 +10,7 @@
 namespace flume {
 
 class DebrisCoupling;
+class StateArchive;
 
 enum class Backend { kCpu, kCuda };
 
@@ -88,7 +89,15 @@ class Simulation {
   // The debris and their recorded trajectories; null when the scene has none.
   virtual const DebrisCoupling* debris() const { return nullptr; }
   virtual DebrisCoupling* debris() { return nullptr; }
+  // Writes the whole state into `ar`, or reads it back (ar.loading()), into a simulation built from the same
+  // scene (solver/checkpoint.h). A backend that cannot throws InputError.
+  virtual void checkpoint(StateArchive& ar);
 };
+
+// The records' state for a checkpoint.
+void checkpoint_state(StateArchive& ar, TimeSeries& s);
+void checkpoint_state(StateArchive& ar, SectionSeries& s);
+void checkpoint_state(StateArchive& ar, Record& r);
 
 // Builds the solver for the scene's dimension and precision. Throws InputError for an unavailable backend.
 std::unique_ptr<Simulation> make_simulation(const Scene& scene, const SimulationOptions& options);

@@ -1,5 +1,7 @@
 #include "solver/rigid/debris_recorder.h"
 
+#include "solver/checkpoint.h"
+
 #include <cmath>
 #include <stdexcept>
 
@@ -113,6 +115,38 @@ void DebrisRecorder::record() {
     tr.previous = now;
   }
   next_j_ = j_end;
+}
+
+void checkpoint_state(StateArchive& ar, DebrisSeries& s) {
+  ar(s.time);
+  ar(s.position);
+  ar(s.orientation);
+  ar(s.velocity);
+  ar(s.angular_velocity);
+  ar(s.acceleration);
+  ar(s.force);
+  ar(s.specific_force_body);
+}
+
+void DebrisRecorder::checkpoint(StateArchive& ar) {
+  ar.section("debris recorder");
+  ar.expect("debris bodies", bodies_.size());
+  ar(started_);
+  ar(next_j_);
+  for (Track& t : bodies_) {
+    ar(t.solver);
+    ar(t.resampled);
+    for (Sample* x : {&t.last_kept, &t.previous, &t.pending}) {
+      ar(x->t);
+      ar(x->x);
+      ar(x->v);
+      ar(x->w);
+      ar(x->q);
+    }
+    ar(t.has_pending);
+    ar(t.window_start_t);
+    ar(t.window_start_v);
+  }
 }
 
 void DebrisRecorder::finish() {

@@ -25,6 +25,9 @@ struct DebrisSeries {
   size_t size() const { return time.size(); }
 };
 
+class StateArchive;
+void checkpoint_state(StateArchive& ar, DebrisSeries& s);
+
 // Call record() once before the first step (initial state) and after every RigidWorld::step(); finish() at the
 // end. The resampled series has samples at t_k = k / resample_hz: position by cubic Hermite interpolation
 // between the recorded states (exact for constant acceleration), orientation by slerp, velocities linearly,
@@ -41,6 +44,8 @@ class DebrisRecorder {
 
   void record();
   void finish();
+  // The series so far and the resampling's carry (solver/checkpoint.h).
+  void checkpoint(StateArchive& ar);
 
   int body_count() const { return int(bodies_.size()); }
   const std::string& name(int body) const { return bodies_.at(body).name; }

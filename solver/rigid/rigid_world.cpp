@@ -40,6 +40,8 @@
 // - CoulombContactSolver (below) fixes Bullet's stale friction on unloaded points.
 #include "solver/rigid/rigid_world.h"
 
+#include "solver/checkpoint.h"
+
 #include <btBulletDynamicsCommon.h>
 
 #include <algorithm>
@@ -373,6 +375,47 @@ void RigidWorld::step(double dt) {
 }
 
 double RigidWorld::time() const { return impl_->time; }
+
+void RigidWorld::checkpoint(StateArchive& ar) {
+  Impl& m = *impl_;
+  ar.section("rigid");
+  ar.expect("debris bodies", m.bodies.size());
+  ar(m.time);
+  for (size_t i = 0; i < m.bodies.size(); ++i) {
+    auto& b = m.bodies[i];
+    btTransform t = b.rb->getWorldTransform();
+    btVector3 v = b.rb->getLinearVelocity(), w = b.rb->getAngularVelocity();
+    // Bullet integrates the basis, not a quaternion: keep its 9 entries and the origin exactly.
+    btScalar basis[9], origin[3], lin[3], ang[3];
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) basis[3 * r + c] = t.getBasis()[r][c];
+      origin[r] = t.getOrigin()[r];
+      lin[r] = v[r];
+      ang[r] = w[r];
+    }
+    ar(basis);
+    ar(origin);
+    ar(lin);
+    ar(ang);
+    ar(b.acceleration);
+    ar(b.angular_acceleration);
+    if (ar.loading()) {
+      t.setBasis(btMatrix3x3(basis[0], basis[1], basis[2], basis[3], basis[4], basis[5], basis[6], basis[7], basis[8]));
+      t.setOrigin(btVector3(origin[0], origin[1], origin[2]));
+      b.rb->setWorldTransform(t);
+      b.rb->setInterpolationWorldTransform(t);
+      b.rb->setLinearVelocity(btVector3(lin[0], lin[1], lin[2]));
+      b.rb->setAngularVelocity(btVector3(ang[0], ang[1], ang[2]));
+      b.rb->setInterpolationLinearVelocity(b.rb->getLinearVelocity());
+      b.rb->setInterpolationAngularVelocity(b.rb->getAngularVelocity());
+      b.rb->updateInertiaTensor();
+      b.force.setZero();
+      b.torque.setZero();
+      m.refresh_view(int(i));
+    }
+  }
+  if (ar.loading()) m.world.updateAabbs();
+}
 
 BodyState RigidWorld::state(int body) const {
   const auto& b = impl_->body(body);

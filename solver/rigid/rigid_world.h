@@ -16,6 +16,8 @@
 
 namespace flume {
 
+class StateArchive;
+
 // Orientation quaternion (w, x, y, z). Unaligned on purpose: Eigen aligns Quaterniond to 16 or 32 bytes depending
 // on the SIMD flags a file is compiled with, so the layout of a struct holding one would differ between, say,
 // this library (-march=native) and a CUDA host file (no -march); DontAlign makes the layout the same everywhere.
@@ -110,6 +112,12 @@ class RigidWorld {
   Eigen::Vector3d surface_velocity(int body, const Eigen::Vector3d& point) const;  // v + omega x (p - c)
   const RigidBoxView& box_view(int body) const;
   const std::vector<RigidBoxView>& box_views() const;  // one per body, index = body; POD, copy to the GPU as is
+
+  // The bodies' poses, velocities and last accelerations, and the clock (solver/checkpoint.h). Bullet's contact
+  // caches (the warm-start impulses of the persistent manifolds) are not kept: after a resume they are
+  // rebuilt from the next contact, so a resumed run with touching boxes differs from an uninterrupted one by
+  // what one step's warm start changes (tests/solver/test_checkpoint.cpp measures it).
+  void checkpoint(StateArchive& ar);
 
   const ContactCoefficients& coefficients() const;
   const RigidSettings& settings() const;
