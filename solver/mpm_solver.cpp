@@ -864,11 +864,9 @@ class MpmSolver final : public Simulation {
         const long nq = static_cast<long>(sym_blocks_.size()) * kNodes;
 #pragma omp for schedule(static)
         for (long q = 0; q < nq; ++q) {
-          const long g = sym_blocks_[q / kNodes];
+          int node[D];
+          const long g = symmetry_node(q, node);
           const int k = static_cast<int>(q % kNodes);
-          int blk[D], node[D];
-          unpack_key<D>(gkeys_[g], blk);
-          for (int d = D - 1, r = k; d >= 0; --d, r /= kBlock) node[d] = blk[d] * kBlock + r % kBlock;
           if (!in_symmetry_zone(node[sym_.axis])) continue;  // updated in the loop above
           const int side = mpm::symmetry_side(sym_, node[sym_.axis]);
           if (side > 0) continue;  // beyond: mirrored after the walls (mirror_beyond_symmetry)
@@ -916,6 +914,14 @@ class MpmSolver final : public Simulation {
     sym_acc_.resize(sym_blocks_.size() * kNodes);
     sym_near_.assign(sym_blocks_.size(), 0);
   }
+  // Raw entry q (slot * kNodes + local node): its grid block, returned, and its node coordinates.
+  long symmetry_node(long q, int* node) const {
+    const long g = sym_blocks_[q / kNodes];
+    int blk[D];
+    unpack_key<D>(gkeys_[g], blk);
+    for (int d = D - 1, r = static_cast<int>(q % kNodes); d >= 0; --d, r /= kBlock) node[d] = blk[d] * kBlock + r % kBlock;
+    return g;
+  }
   // Grid index of a node (global node coordinates), or -1 where no active block holds it.
   long grid_index(const int* node) const {
     int blk[D], local = 0;
@@ -946,11 +952,9 @@ class MpmSolver final : public Simulation {
     const long nq = static_cast<long>(sym_blocks_.size()) * kNodes;
 #pragma omp parallel for schedule(static)
     for (long q = 0; q < nq; ++q) {
-      const long g = sym_blocks_[q / kNodes];
+      int node[D];
+      const long g = symmetry_node(q, node);
       const int k = static_cast<int>(q % kNodes);
-      int blk[D], node[D];
-      unpack_key<D>(gkeys_[g], blk);
-      for (int d = D - 1, r = k; d >= 0; --d, r /= kBlock) node[d] = blk[d] * kBlock + r % kBlock;
       if (mpm::symmetry_side(sym_, node[sym_.axis]) <= 0) continue;
       const size_t idx = static_cast<size_t>(g) * kNodes + k;
       const long m = symmetry_entry(node);

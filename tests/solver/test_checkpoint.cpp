@@ -22,6 +22,7 @@
 #include "solver/scene.h"
 #include "solver/simulation.h"
 #include "store/h5/run_file.h"
+#include "tests/solver/tank_scene.h"
 #include "tests/solver/test_util.h"
 
 namespace flume {
@@ -159,25 +160,9 @@ TEST(Checkpoint, ResumedInflowRepeatsTheUninterruptedRun) {
 // impulses pending for the next exchange are part of the state. (A box touching a solid resumes with Bullet's
 // contact caches rebuilt, which changes that step's warm start: not exact, not tested here.)
 TEST(Checkpoint, ResumedFloatingBoxRepeatsTheUninterruptedRun) {
-  const double dx = 0.02, L = 0.3, depth = 0.15, H = 0.08;
-  char buf[4096];
-  std::snprintf(buf, sizeof buf, R"({
-    "name": "tank", "dimension": 3,
-    "domain": {"lo": [-0.06, -0.06, -0.06], "hi": [0.36, 0.36, 0.36], "walls": "slip"},
-    "solver": {"dx": %g, "ppc": 8, "cfl": 0.4, "end_time": 0.12},
-    "fluid": {"bulk_modulus": 5e4, "jbar_psi": 0},
-    "boundaries": [
-      {"name": "floor", "type": "half_space", "point": [0, 0, 0], "normal": [0, 0, 1], "condition": "slip"},
-      {"name": "x0", "type": "half_space", "point": [0, 0, 0], "normal": [1, 0, 0], "condition": "slip"},
-      {"name": "x1", "type": "half_space", "point": [%g, 0, 0], "normal": [-1, 0, 0], "condition": "slip"},
-      {"name": "y0", "type": "half_space", "point": [0, 0, 0], "normal": [0, 1, 0], "condition": "slip"},
-      {"name": "y1", "type": "half_space", "point": [0, %g, 0], "normal": [0, -1, 0], "condition": "slip"}],
-    "water": [{"lo": [0, 0, 0], "hi": [%g, %g, %g]}],
-    "debris": {"density": 419, "bodies": [{"name": "D1", "size": [%g, %g, %g], "position": [%g, %g, %g]}]},
-    "instruments": {"diagnostics_rate_hz": 100}
-  })",
-                dx, L, L, L, L, depth, H, H, H, L / 2, L / 2, depth - 0.04 + H / 2);
-  const Scene scene = parse_scene_text(buf, "floating");
+  const double depth = 0.15, H = 0.08;
+  const Scene scene = parse_scene_text(test::tank_scene(0.3, depth, H, 419.0, depth - 0.04 + H / 2, 0.02, 0.12),
+                                       "floating");
   expect_exact_resume(scene, 0.05);
 }
 

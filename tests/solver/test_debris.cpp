@@ -10,36 +10,14 @@
 #include "solver/debris_metrics.h"
 #include "solver/scene.h"
 #include "solver/simulation.h"
+#include "tests/solver/tank_scene.h"
 
 namespace flume {
 namespace {
 
 constexpr double kG = 9.80665;
+using test::tank_scene;
 
-// A square tank (slip walls at 0 and L, floor at 0) filled to `depth`, with one cube of edge H, density rho_b.
-std::string tank_scene(double L, double depth, double H, double rho_b, double z_centre, double dx, double end_time,
-                       double psi = 0.0) {
-  const double pad = 3 * dx;
-  char buf[4096];
-  std::snprintf(buf, sizeof buf, R"({
-    "name": "tank", "dimension": 3,
-    "domain": {"lo": [%g, %g, %g], "hi": [%g, %g, %g], "walls": "slip"},
-    "solver": {"dx": %g, "ppc": 8, "cfl": 0.4, "end_time": %g},
-    "fluid": {"bulk_modulus": 5e4, "jbar_psi": %g},
-    "boundaries": [
-      {"name": "floor", "type": "half_space", "point": [0, 0, 0], "normal": [0, 0, 1], "condition": "slip"},
-      {"name": "x0", "type": "half_space", "point": [0, 0, 0], "normal": [1, 0, 0], "condition": "slip"},
-      {"name": "x1", "type": "half_space", "point": [%g, 0, 0], "normal": [-1, 0, 0], "condition": "slip"},
-      {"name": "y0", "type": "half_space", "point": [0, 0, 0], "normal": [0, 1, 0], "condition": "slip"},
-      {"name": "y1", "type": "half_space", "point": [0, %g, 0], "normal": [0, -1, 0], "condition": "slip"}],
-    "water": [{"lo": [0, 0, 0], "hi": [%g, %g, %g]}],
-    "debris": {"density": %g, "bodies": [{"name": "D1", "size": [%g, %g, %g], "position": [%g, %g, %g]}]},
-    "instruments": {"diagnostics_rate_hz": 50}
-  })",
-                -pad, -pad, -pad, L + pad, L + pad, 2 * depth + pad, dx, end_time, psi, L, L, L, L, depth, rho_b, H, H,
-                H, L / 2, L / 2, z_centre);
-  return buf;
-}
 
 // Issue 4, test 3. A cube of 419 kg/m^3 (the paper's MPM debris density) placed with its bottom 4 cm under a
 // 0.15 m deep still tank (no water seeded inside it) is released. Archimedes: it floats at a draft of

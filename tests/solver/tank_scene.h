@@ -1,0 +1,33 @@
+// A tank scene with one debris cube, shared by the debris and checkpoint tests.
+#pragma once
+#include <cstdio>
+#include <string>
+
+namespace flume::test {
+
+// A square tank (slip walls at 0 and L, floor at 0) filled to `depth`, with one cube of edge H, density rho_b.
+inline std::string tank_scene(double L, double depth, double H, double rho_b, double z_centre, double dx, double end_time,
+                       double psi = 0.0) {
+  const double pad = 3 * dx;
+  char buf[4096];
+  std::snprintf(buf, sizeof buf, R"({
+    "name": "tank", "dimension": 3,
+    "domain": {"lo": [%g, %g, %g], "hi": [%g, %g, %g], "walls": "slip"},
+    "solver": {"dx": %g, "ppc": 8, "cfl": 0.4, "end_time": %g},
+    "fluid": {"bulk_modulus": 5e4, "jbar_psi": %g},
+    "boundaries": [
+      {"name": "floor", "type": "half_space", "point": [0, 0, 0], "normal": [0, 0, 1], "condition": "slip"},
+      {"name": "x0", "type": "half_space", "point": [0, 0, 0], "normal": [1, 0, 0], "condition": "slip"},
+      {"name": "x1", "type": "half_space", "point": [%g, 0, 0], "normal": [-1, 0, 0], "condition": "slip"},
+      {"name": "y0", "type": "half_space", "point": [0, 0, 0], "normal": [0, 1, 0], "condition": "slip"},
+      {"name": "y1", "type": "half_space", "point": [0, %g, 0], "normal": [0, -1, 0], "condition": "slip"}],
+    "water": [{"lo": [0, 0, 0], "hi": [%g, %g, %g]}],
+    "debris": {"density": %g, "bodies": [{"name": "D1", "size": [%g, %g, %g], "position": [%g, %g, %g]}]},
+    "instruments": {"diagnostics_rate_hz": 50}
+  })",
+                -pad, -pad, -pad, L + pad, L + pad, 2 * depth + pad, dx, end_time, psi, L, L, L, L, depth, rho_b, H, H,
+                H, L / 2, L / 2, z_centre);
+  return buf;
+}
+
+}  // namespace flume::test
