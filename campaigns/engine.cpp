@@ -193,6 +193,14 @@ std::vector<std::string> run_command(const CampaignSpec& spec, size_t index, con
   if (spec.model.empty()) {
     const std::string& scene = spec.listed ? spec.point_scenes.at(index) : spec.scene;
     argv.insert(argv.end(), {"run", scene, "--out", out_dir, "--threads", std::to_string(spec.run.threads)});
+    if (spec.run.checkpoint_every_s > 0) {
+      char every[32];
+      std::snprintf(every, sizeof every, "%.17g", spec.run.checkpoint_every_s);
+      argv.insert(argv.end(), {"--checkpoint-every", every});
+      // A run left in flight by a killed job goes on from its last checkpoint rather than from t = 0.
+      std::error_code ec;
+      if (fs::exists(fs::path(out_dir) / "checkpoint.bin", ec)) argv.push_back("--resume");
+    }
   } else {
     argv.insert(argv.end(), {"model", spec.model, "--out", out_dir});
   }

@@ -8,6 +8,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -49,8 +50,14 @@ std::string host_name() {
 
 Child start_child(const ChildSpec& spec) {
   std::error_code ec;
-  fs::remove_all(spec.dir, ec);  // a redone run must not read the previous attempt's run.json
+  // A redone run must not read the previous attempt's run.json; one that resumes keeps its checkpoint.
+  const fs::path checkpoint = fs::path(spec.dir) / "checkpoint.bin", aside = spec.dir + ".checkpoint.bin";
+  const bool resume = std::find(spec.argv.begin(), spec.argv.end(), "--resume") != spec.argv.end() &&
+                      fs::exists(checkpoint, ec);
+  if (resume) fs::rename(checkpoint, aside, ec);
+  fs::remove_all(spec.dir, ec);
   fs::create_directories(spec.dir, ec);
+  if (resume && !ec) fs::rename(aside, checkpoint, ec);
   if (ec) throw std::runtime_error("cannot create run directory " + spec.dir + ": " + ec.message());
   std::vector<char*> args;
   for (const auto& a : spec.argv) args.push_back(const_cast<char*>(a.c_str()));

@@ -591,6 +591,9 @@ CampaignSpec parse_campaign_spec(const std::string& json_text, const std::string
     spec.run.threads = static_cast<int>(r.integer("threads", 1, 1, 1024));
     spec.run.memory_limit_mb = r.number("memory_limit_mb", 0.0, 0.0, 1e9);
     spec.run.output_dir = r.string("output_dir", std::string());
+    spec.run.checkpoint_every_s = r.number("checkpoint_every_s", 0.0, 0.0, 1e7);
+    if (spec.run.checkpoint_every_s > 0 && spec.run.checkpoint_every_s < 1)
+      r.fail("checkpoint_every_s", "must be 0 (no checkpoints) or in [1, 1e7] wall-clock seconds");
     r.finish();
   }
   root.finish();

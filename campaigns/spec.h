@@ -21,6 +21,7 @@ struct RunSettings {
   double time_limit_s = 3600.0;
   int threads = 1;
   double memory_limit_mb = 0.0;  // address-space limit per run; 0: none
+  double checkpoint_every_s = 0; // > 0: each run checkpoints this often (wall s) and a redone run resumes
   std::string output_dir;        // empty: "<db>.runs/<campaign>" next to the database
 };
 

@@ -1,6 +1,11 @@
 #include "solver/checkpoint.h"
 
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -37,17 +42,30 @@ void write_checkpoint_file(const std::string& path, const std::string& scene_key
   head(size);
   head(sum);
   const std::string part = path + ".part";
-  {
-    std::ofstream out(part, std::ios::binary | std::ios::trunc);
-    if (!out) throw InputError(part, "", "cannot write the checkpoint");
-    uint32_t version = kVersion;
-    out.write(kMagic, sizeof kMagic);
-    out.write(reinterpret_cast<const char*>(&version), sizeof version);
-    out.write(head.bytes().data(), static_cast<std::streamsize>(head.bytes().size()));
-    out.write(payload.data(), static_cast<std::streamsize>(payload.size()));
-    out.flush();
-    if (!out) throw InputError(part, "", "cannot write the checkpoint (disk full?)");
-  }
+  // Written and flushed to the disk before the rename, so that after a crash the name holds either the old
+  // checkpoint or the whole new one, never a file the rename reached before its data.
+  const int fd = ::open(part.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) throw InputError(part, "", std::string("cannot write the checkpoint: ") + std::strerror(errno));
+  const auto put = [&](const char* p, size_t n) {
+    while (n > 0) {
+      const ssize_t w = ::write(fd, p, n);
+      if (w < 0 && errno == EINTR) continue;
+      if (w <= 0) {
+        const std::string why = std::strerror(errno);
+        ::close(fd);
+        throw InputError(part, "", "cannot write the checkpoint: " + why);
+      }
+      p += w;
+      n -= static_cast<size_t>(w);
+    }
+  };
+  const uint32_t version = kVersion;
+  put(kMagic, sizeof kMagic);
+  put(reinterpret_cast<const char*>(&version), sizeof version);
+  put(head.bytes().data(), head.bytes().size());
+  put(payload.data(), payload.size());
+  if (::fsync(fd) != 0 || ::close(fd) != 0)
+    throw InputError(part, "", std::string("cannot write the checkpoint: ") + std::strerror(errno));
   std::error_code ec;
   std::filesystem::rename(part, path, ec);
   if (ec) throw InputError(path, "", "cannot replace the checkpoint: " + ec.message());

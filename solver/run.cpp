@@ -144,7 +144,13 @@ RunOutcome run_scene(const Scene& scene, const SimulationOptions& options, const
     double wall = wall_before + std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     ar(wall);
     sim->checkpoint(ar);
-    write_checkpoint_file(ckpt_path, scene_key, ar.bytes());
+    // A checkpoint that cannot be written (disk full) costs the run nothing but its protection: say so and run on
+    // (the previous checkpoint, if any, is intact).
+    try {
+      write_checkpoint_file(ckpt_path, scene_key, ar.bytes());
+    } catch (const InputError& e) {
+      std::fprintf(stderr, "flume run: warning: %s (at t = %.3f s; the run goes on)\n", e.what(), sim->time());
+    }
     last_ckpt = std::chrono::steady_clock::now();
   };
   RunStatus status = RunStatus::kRunning;

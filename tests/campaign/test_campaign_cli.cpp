@@ -146,6 +146,50 @@ TEST(CampaignResume, KillNineAtTwentyRandomMomentsThenEveryRunOkOnce) {
     EXPECT_EQ(scalar(db, "SELECT finished FROM runs WHERE id = " + id), finished) << "run " << id << " was redone";
 }
 
+// With run.checkpoint_every_s, a run left in flight by a killed campaign goes on from its last checkpoint when
+// the campaign resumes (`flume run --resume`, docs/checkpoints.md), and ends with the metrics of a run never
+// interrupted, to the bit. The run (waseda_2d at dx 0.02 m, 1.5 s, one thread) takes several times the 4 s
+// before the kill; if it finished first the test says so rather than passing.
+TEST(CampaignResume, KilledRunGoesOnFromItsCheckpoint) {
+  const fs::path dir = test_dir(), spec = dir / "spec.json", db = dir / "study.db";
+  const std::string scene = std::string(FLUME_SOURCE_DIR) + "/scenes/waseda/waseda_2d.json";
+  write_file(spec, R"({"name": "checkpointed", "scene": ")" + scene + R"(",
+  "overrides": {"solver.dx": 0.02, "solver.end_time": 1.5},
+  "design": {"type": "list", "points": [{"reservoir.gate_height_m": 0.1}]},
+  "run": {"time_limit_s": 600, "threads": 1, "checkpoint_every_s": 1, "output_dir": ")" + (dir / "runs").string() + R"("}})");
+  const pid_t pid = spawn(flume_cmd({"campaign", "run", spec.string(), "--db", db.string()}), dir / "out.log",
+                          dir / "err.log");
+  ASSERT_GT(pid, 0);
+  std::this_thread::sleep_for(std::chrono::seconds(4));
+  kill(pid, SIGKILL);
+  wait_for(pid, 30);
+  const fs::path run_dir = dir / "runs" / "run-000000";
+  ASSERT_NE(scalar(db, "SELECT status FROM runs"), "ok") << "the run finished within 4 s: nothing was killed";
+  ASSERT_TRUE(fs::exists(run_dir / "checkpoint.bin"));
+  const Result resumed = run(flume_cmd({"campaign", "run", spec.string(), "--db", db.string()}), dir, 110);
+  ASSERT_EQ(resumed.rc, 0) << resumed.err;
+  EXPECT_EQ(scalar(db, "SELECT status FROM runs"), "ok");
+  EXPECT_NE(read_file(run_dir / "stderr.log").find("resumed from"), std::string::npos) << read_file(run_dir / "stderr.log");
+  // The same run straight through: the same metrics, to the bit.
+  const Result straight = run(flume_cmd({"run", scene, "--out", (dir / "straight").string(), "--set", "solver.dx=0.02",
+                                         "--set", "solver.end_time=1.5", "--set", "reservoir.gate_height_m=0.1",
+                                         "--threads", "1", "--quiet"}),
+                              dir, 110);
+  ASSERT_EQ(straight.rc, 0) << straight.err;
+  // run.json holds every metric to 17 digits (SQLite's printf keeps 16): the two files' numbers, as text.
+  const std::string a = read_file(dir / "straight" / "run.json"), b = read_file(run_dir / "run.json");
+  const auto number = [](const std::string& json, const std::string& name) {
+    const auto at = json.find("\"" + name + "\"");
+    if (at == std::string::npos) return std::string("(missing)");
+    const auto from = json.find(':', at) + 1, to = json.find_first_of(",}\n", from);
+    return json.substr(from, to - from);
+  };
+  for (const char* m : {"WG1.peak_m", "WG2.peak_m", "WG2.peak_time_s", "mass_kg"}) {
+    EXPECT_NE(number(a, m), "(missing)") << m;
+    EXPECT_EQ(number(a, m), number(b, m)) << m;
+  }
+}
+
 // Issue 5, point 3: a segfault, a hang past the time limit and an unstable run are recorded; the rest finish.
 TEST(CampaignFailures, SegfaultHangUnstableAreRecordedAndOthersComplete) {
   const fs::path dir = test_dir();
