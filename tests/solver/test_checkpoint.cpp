@@ -257,6 +257,10 @@ TEST(Checkpoint, RefusesWhatDoesNotFit) {
   EXPECT_EQ(error_field([&] { run_scene(scene("instruments.snapshot_rate_hz=10"), {}, out, false, every); },
                         "snapshots"),
             "instruments.snapshot_rate_hz");
+  // The CUDA backend, before anything runs.
+  SimulationOptions cuda;
+  cuda.backend = Backend::kCuda;
+  EXPECT_EQ(error_field([&] { run_scene(scene(""), cuda, out, false, every); }, "does not checkpoint"), "cuda");
   // A flipped byte, then a truncated file.
   const fs::path ck = dir / "run" / "checkpoint.bin";
   std::string bytes = test::read_text(ck.string());
