@@ -138,7 +138,8 @@ RunOutcome run_scene(const Scene& scene, const SimulationOptions& options, const
   const double snap_period = scene.instruments.snapshot_rate_hz > 0 ? 1.0 / scene.instruments.snapshot_rate_hz : 0;
   double next_snap = 0;
   double next_report = 0;
-  while (next_report <= sim->time()) next_report += scene.solver.end_time / 10;
+  if (checkpoints.resume)  // the next tenth of the run after the checkpoint
+    while (next_report <= sim->time()) next_report += scene.solver.end_time / 10;
   const auto t0 = std::chrono::steady_clock::now();
   auto last_ckpt = t0;
   const auto save = [&] {
