@@ -1,13 +1,15 @@
 #!/usr/bin/env bash
 # Issue 4 point 5: the Waseda apron fed by a 2D run, six upstream containers in two layers, and their top-down
 # paths with the Naito (2014) cone and the Nistor (2017) eq. 58/59 guidelines (docs/debris.md, "The Waseda apron").
-#   feed    scenes/waseda/waseda_2d.json at dx 0.02 m, 12 s: the section record at x = 4.35 m
-#   5x2     scenes/waseda/waseda_apron.json, 5x2 columns, dx = DX (0.02 m), END_TIME (7 s) simulated
-#   0x0     the same without obstacles at DX0 (0.03 m: the eq. 58 comparison; dx 0.02 did not fit the session)
+#   feed    scenes/waseda/waseda_2d.json at dx 0.02 m, 12 s, gate GATE: the section record at x = 4.35 m
+#   5x2     scenes/waseda/waseda_apron.json, 5x2 columns, dx = DX (0.02 m), END_TIME (12 s) simulated
+#   0x0     the same without obstacles at DX0 (0.03 m: the eq. 58 comparison)
 #   paths   flume debris-paths over both runs -> $OUT/debris_paths.svg and the metric tables
 # Usage: docs/debris_waseda_apron.sh [feed 5x2 0x0 paths]   (default: all four)
-# Environment: FLUME (build/bin/flume), OUT (debris-apron), THREADS (2), DX, DX0, END_TIME.
-# Cost on the 2-core VM: feed 110 s (1 thread); 5x2 about 45 min (2 threads); 0x0 at 0.03 m about 20 min.
+# Environment: FLUME (build/bin/flume), OUT (debris-apron), THREADS (2), DX, DX0, END_TIME, GATE (0.10 m).
+# The apron runs checkpoint every 10 min (docs/checkpoints.md): run the script again after a kill and each goes
+# on from its checkpoint. Cost on the 2-core VM, 12 s: feed 80-130 s (1 thread); 0x0 at 0.03 m about 50 min
+# (1 thread); 5x2 at 0.02 m several hours (session 7: 7 s in 82 min on 2 threads).
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
 FLUME=${FLUME:-$ROOT/build/bin/flume}
@@ -15,20 +17,24 @@ OUT=${OUT:-$ROOT/debris-apron}
 THREADS=${THREADS:-2}
 DX=${DX:-0.02}
 DX0=${DX0:-0.03}
-END_TIME=${END_TIME:-7}
+END_TIME=${END_TIME:-12}
+GATE=${GATE:-0.10}
 STEPS=("$@")
 [ ${#STEPS[@]} -eq 0 ] && STEPS=(feed 5x2 0x0 paths)
 mkdir -p "$OUT"
 cd "$OUT"
 want() { for s in "${STEPS[@]}"; do [ "$s" = "$1" ] && return 0; done; return 1; }
 debris=(--set debris.count=6 --set debris.layers=2 --set debris.placement=upstream)
-if want feed; then
+if want feed && ! grep -qs '"status": "ok"' feed2d/run.json; then  # a finished feed is kept
   "$FLUME" run "$ROOT/scenes/waseda/waseda_2d.json" --out feed2d --set solver.dx=0.02 --set solver.end_time=12 \
-    --threads "$THREADS"
+    --set reservoir.gate_height_m="$GATE" --threads "$THREADS"
 fi
 apron() {  # apron NAME LAYOUT DX
+  local resume=()
+  [ -f "$1/checkpoint.bin" ] && resume=(--resume)
   "$FLUME" run "$ROOT/scenes/waseda/waseda_apron.json" --out "$1" --set solver.dx="$3" --set solver.end_time="$END_TIME" \
-    --set inflow.record=feed2d/result.h5 "${debris[@]}" --set obstacles.layout="$2" --threads "$THREADS"
+    --set inflow.record="$PWD/feed2d/result.h5" "${debris[@]}" --set obstacles.layout="$2" --threads "$THREADS" \
+    --checkpoint-every 600 "${resume[@]}"
 }
 want 5x2 && apron apron_5x2 5x2 "$DX"
 want 0x0 && apron apron_0x0 0x0 "$DX0"

@@ -84,13 +84,14 @@ std::string read_checkpoint_file(const std::string& path, const std::string& sce
   if (version != kVersion)
     throw InputError(path, "version", "checkpoint format " + std::to_string(version) + ", this build reads " +
                                           std::to_string(kVersion));
-  StateArchive head(all.substr(sizeof kMagic + sizeof version), path);
+  const size_t prefix = sizeof kMagic + sizeof version;
+  StateArchive head(all.substr(prefix), path);
   std::string key;
   uint64_t size = 0, sum = 0;
   head(key);
   head(size);
   head(sum);
-  const size_t start = sizeof kMagic + sizeof version + (8 + key.size()) + 16;
+  const size_t start = prefix + head.position();
   if (all.size() != start + size) throw InputError(path, "", "checkpoint truncated or padded");
   std::string payload = all.substr(start);
   if (fnv1a(payload) != sum) throw InputError(path, "", "checkpoint corrupt (checksum differs)");

@@ -42,6 +42,7 @@ class StateArchive {
   bool loading() const { return loading_; }
   const std::string& bytes() const { return bytes_; }
   const std::string& file() const { return file_; }
+  size_t position() const { return pos_; }  // bytes read so far
 
   // A named mark: written when saving, checked when loading, so that a state read out of step (a different
   // build or scene) is refused where it goes wrong rather than silently misread.

@@ -457,6 +457,7 @@ class MpmSolver final : public Simulation {
     std::sort(g.begin(), g.end());
     g.erase(std::unique(g.begin(), g.end()), g.end());
     gkeys_.swap(g);
+    if (has_sym_) index_symmetry_blocks();
     auto find = [](const std::vector<uint64_t>& v, uint64_t k) -> int32_t {
       auto it = std::lower_bound(v.begin(), v.end(), k);
       return it != v.end() && *it == k ? static_cast<int32_t>(it - v.begin()) : -1;
@@ -783,7 +784,6 @@ class MpmSolver final : public Simulation {
     std::vector<double> impulse(static_cast<size_t>(nthreads) * walls_.size() * D, 0.0);
     if (debris_) coupling_.assign(nthreads, {});
     ghosts_.resize(nthreads);
-    if (has_sym_) index_symmetry_blocks();
 #pragma omp parallel
     {
       double* my_impulse = impulse.data() + static_cast<size_t>(omp_get_thread_num()) * walls_.size() * D;
@@ -844,7 +844,6 @@ class MpmSolver final : public Simulation {
           }
         }
         const int slot = has_sym_ ? sym_slot_[g] : -1;
-        if (slot >= 0) sym_near_[slot] = near_debris;
         for (int k = 0; k < kNodes; ++k) {
           int node[D];
           for (int d = D - 1, r = k; d >= 0; --d, r /= kBlock) node[d] = blk[d] * kBlock + r % kBlock;
@@ -877,8 +876,9 @@ class MpmSolver final : public Simulation {
             const long m = symmetry_entry(node);
             if (m >= 0) a += sign * sym_acc_[m];
           }
-          update_node(a, g, static_cast<size_t>(g) * kNodes + k, node, sym_near_[q / kNodes] != 0, side == 0 ? 0.5 : 1.0,
-                      dt, inv_cell_volume, my_impulse, my_coupling, my_ghosts);
+          // No debris near: a scene with a symmetry plane has none (setup_boundaries).
+          update_node(a, g, static_cast<size_t>(g) * kNodes + k, node, false, side == 0 ? 0.5 : 1.0, dt,
+                      inv_cell_volume, my_impulse, my_coupling, my_ghosts);
         }
       }
     }
@@ -898,6 +898,7 @@ class MpmSolver final : public Simulation {
   bool in_symmetry_zone(int i) const {
     return mpm::symmetry_side(sym_, i) >= 0 || std::abs(2 * i - sym_.twice) <= 2 * kSymmetryZone;
   }
+  // The slots, from the grid blocks: rebuilt with them (build_blocks).
   void index_symmetry_blocks() {
     const long ngb = static_cast<long>(gkeys_.size());
     sym_slot_.assign(gkeys_.size(), -1);
@@ -912,7 +913,6 @@ class MpmSolver final : public Simulation {
       sym_blocks_.push_back(g);
     }
     sym_acc_.resize(sym_blocks_.size() * kNodes);
-    sym_near_.assign(sym_blocks_.size(), 0);
   }
   // Raw entry q (slot * kNodes + local node): its grid block, returned, and its node coordinates.
   long symmetry_node(long q, int* node) const {
@@ -1401,7 +1401,6 @@ class MpmSolver final : public Simulation {
   std::vector<int> sym_slot_;     // per grid block: its slot among the blocks near the symmetry plane, or -1
   std::vector<long> sym_blocks_;  // per slot: the grid block
   std::vector<Lane> sym_acc_;     // per slot and local node: this step's raw lanes (updated after the fold)
-  std::vector<char> sym_near_;    // per slot: the block is near a debris body
   bool has_sym_ = false;
   mpm::SymmetryPlane sym_;
   struct MirrorChange {
