@@ -735,7 +735,7 @@ class MpmSolver final : public Simulation {
     }
     if (ghost.axes && !ambiguous) {
       ghost.idx = idx;
-    ghost.load_weight = load_weight;
+      ghost.load_weight = load_weight;
       for (int d = 0; d < D; ++d) ghost.offset[d] += node[d];  // now the mirror node itself
       my_ghosts->push_back(ghost);
     }
@@ -763,6 +763,7 @@ class MpmSolver final : public Simulation {
       if (c.body >= 0) {
         c.id = idx;
         c.m = double(m);
+        c.p = law_d_.pressure(double(acc[1 + D] / m));
         for (int d = 0; d < D; ++d) c.v[d] = double(v[d]);
         my_coupling->push_back(c);
         on_wall = 1;

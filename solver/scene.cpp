@@ -235,7 +235,8 @@ Shape read_shape(Reader& r, int dim) {
   return s;
 }
 
-// Signed distance from x to a shape (negative inside the solid).
+}  // namespace
+
 double shape_distance(const Shape& s, const Vec3d& x, int dim) {
   if (s.type == ShapeType::kHalfSpace) {
     double d = 0;
@@ -250,6 +251,8 @@ double shape_distance(const Shape& s, const Vec3d& x, int dim) {
   }
   return outside2 > 0 ? std::sqrt(outside2) : inside;
 }
+
+namespace {
 
 // Is the solid overlapping the open box (lo, hi) by more than tol? Tested on a lattice of the box's points,
 // which is exact for half-spaces (corners) and for boxes (the lattice includes the overlap's corners).

@@ -23,6 +23,9 @@ struct Shape {
   Vec3d point{}, normal{};
 };
 
+// Signed distance from x to a shape, negative inside the solid (a 2D scene passes dim = 2).
+double shape_distance(const Shape& s, const Vec3d& x, int dim);
+
 struct Boundary {
   std::string name;
   Shape shape;

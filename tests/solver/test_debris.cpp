@@ -52,6 +52,8 @@ TEST(Floating, SettlesAtArchimedesDraftWithinOneCell) {
   EXPECT_LT(s.velocity.norm(), 1e-2);  // at rest, not passing through equilibrium
   EXPECT_NEAR(s.position.x(), L / 2, 1e-3);
   EXPECT_NEAR(s.position.y(), L / 2, 1e-3);
+  // Afloat, more than a cell above the floor: the film under a resting box (debris_coupling.h) plays no part.
+  EXPECT_EQ(sim->debris()->film_force()[0].norm(), 0.0);
 }
 
 // A cube twice as dense as water sinks to the floor and stays there: the water's load does not exceed the
@@ -67,6 +69,62 @@ TEST(Floating, DenseBoxSinksToTheFloor) {
   std::printf("bottom at %.5f m, speed %.2g m/s\n", s.position.z() - H / 2, s.velocity.norm());
   EXPECT_NEAR(s.position.z() - H / 2, 0.0, 1e-3);  // on the floor (contact resolves to micrometres)
   EXPECT_LT(s.velocity.norm(), 1e-2);
+}
+
+// A Waseda container (0.06 x 0.15 x 0.06 m, 418.5 kg/m^3) standing on the floor of a still tank, 0.5 mm up as
+// the Waseda layout places it, the water seeded round it to `depth`. Returns the final state and the water
+// volume V (the tank to `depth` less the box's part below it) for the draft.
+struct Grounded {
+  BodyState state;
+  double V, A_t, A_b;
+};
+Grounded run_grounded(double depth, double dx) {
+  const double L = 0.45, pad = 3 * dx, gap = 0.0005, H = 0.06;
+  char buf[2048];
+  std::snprintf(buf, sizeof buf, R"({
+    "name": "grounded", "dimension": 3,
+    "domain": {"lo": [%g, %g, %g], "hi": [%g, %g, 0.2], "walls": "slip"},
+    "solver": {"dx": %g, "ppc": 8, "cfl": 0.4, "end_time": 2.0},
+    "fluid": {"bulk_modulus": 2e6, "jbar_psi": 0.9},
+    "boundaries": [
+      {"name": "floor", "type": "half_space", "point": [0, 0, 0], "normal": [0, 0, 1]},
+      {"name": "x0", "type": "half_space", "point": [0, 0, 0], "normal": [1, 0, 0]},
+      {"name": "x1", "type": "half_space", "point": [%g, 0, 0], "normal": [-1, 0, 0]},
+      {"name": "y0", "type": "half_space", "point": [0, 0, 0], "normal": [0, 1, 0]},
+      {"name": "y1", "type": "half_space", "point": [0, %g, 0], "normal": [0, -1, 0]}],
+    "water": [{"lo": [0, 0, 0], "hi": [%g, %g, %g]}],
+    "debris": {"density": 418.5, "bodies": [{"name": "D1", "size": [0.06, 0.15, %g], "position": [%g, %g, %g]}]}
+  })",
+                -pad, -pad, -pad, L + pad, L + pad, dx, L, L, L, L, depth, H, L / 2, L / 2, gap + H / 2);
+  auto sim = make_simulation(parse_scene_text(buf, "grounded"), {});
+  while (sim->step() == RunStatus::kRunning) {
+  }
+  EXPECT_EQ(sim->step(), RunStatus::kOk) << "depth " << depth << ", dx " << dx << ": " << sim->message();
+  const double A_b = 0.06 * 0.15;
+  return {sim->debris()->world().state(0), L * L * depth - A_b * (depth - gap), L * L, A_b};
+}
+
+// A container resting on the floor in water deeper than its draft floats up (the film under it carries the
+// water's pressure: debris_coupling.h); without it the grid held it on the floor at any dx (0.03, 0.02 and
+// 0.01 m measured). In 4.5 cm of water (1.8 drafts) it must rise to Archimedes' draft rho_b / rho_w H =
+// 0.0251 m within one cell, the test 3 tolerance, at the Waseda runs' resolutions, and come to rest there.
+// In 2 cm (0.8 drafts) the film's push, rho g 0.02 m over the footprint (1.8 N), is less than its weight
+// (2.2 N): it must stay on the floor.
+TEST(Floating, GroundedContainerLiftsOffToArchimedesDraft) {
+  const double H = 0.06, expected = 0.4185 * H;
+  for (const double dx : {0.03, 0.02}) {
+    const Grounded g = run_grounded(0.045, dx);
+    const double z_b = g.state.position.z() - H / 2;
+    const double draft = (g.V / g.A_t - z_b) / (1 - g.A_b / g.A_t);
+    std::printf("dx %.2f: bottom %.4f m, draft %.4f m against %.4f m (%.2f cells), speed %.2g m/s\n", dx, z_b, draft,
+                expected, (draft - expected) / dx, g.state.velocity.norm());
+    EXPECT_NEAR(draft, expected, dx) << "dx " << dx;
+    EXPECT_GT(z_b, 0.005) << "dx " << dx << ": still on the floor";
+    EXPECT_LT(g.state.velocity.norm(), 1e-2) << "dx " << dx;
+  }
+  const Grounded shallow = run_grounded(0.020, 0.03);
+  std::printf("2 cm of water: bottom %.5f m\n", shallow.state.position.z() - H / 2);
+  EXPECT_LT(shallow.state.position.z() - H / 2, 0.001);
 }
 
 // Without gravity or walls in reach, the water and a box moving through it exchange momentum only with each
