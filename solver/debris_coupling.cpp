@@ -122,44 +122,6 @@ void DebrisCoupling::film_loads(const std::vector<CouplingNode>& nodes, const st
     const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
     const double h1 = v.half_extent[a1], h2 = v.half_extent[a2], ha = v.half_extent[axis];
     const Eigen::Vector3d e1 = R.col(a1), e2 = R.col(a2), face = c + ha * n;
-    // Patches of the face with a solid less than a cell beneath.
-    const int n1 = std::max(1, int(std::ceil(4 * h1 / dx_))), n2 = std::max(1, int(std::ceil(4 * h2 / dx_)));
-    const double s1 = 2 * h1 / n1, s2 = 2 * h2 / n2;
-    struct Patch {
-      Eigen::Vector3d at;
-      double w;
-      int support;  // the box beneath, or -1 for a static solid
-    };
-    std::vector<Patch> patches;
-    for (int i1 = 0; i1 < n1; ++i1)
-      for (int i2 = 0; i2 < n2; ++i2) {
-        const Eigen::Vector3d P = face + (-h1 + (i1 + 0.5) * s1) * e1 + (-h2 + (i2 + 0.5) * s2) * e2;
-        // What lies at P + t dx n: -2 nothing, -1 a static solid, else the box.
-        const auto solid_at = [&](double t) {
-          const Eigen::Vector3d Q = P + t * dx_ * n;
-          if (in_static_solid(Q)) return -1;
-          const int box = box_at(Q, b);
-          return box >= 0 ? box : -2;
-        };
-        for (int k = 1; k <= kGapSteps; ++k) {
-          int support = solid_at(double(k) / kGapSteps);
-          if (support == -2) continue;
-          double lo = double(k - 1) / kGapSteps, hi = double(k) / kGapSteps;  // the surface lies between
-          for (int it = 0; it < kGapBisections; ++it) {
-            const double mid = 0.5 * (lo + hi);
-            const int at = solid_at(mid);
-            if (at == -2) {
-              lo = mid;
-            } else {
-              hi = mid;
-              support = at;
-            }
-          }
-          patches.push_back({P, 1.0 - 0.5 * (lo + hi), support});
-          break;
-        }
-      }
-    if (patches.empty()) continue;
     // The rim's pressure at the face's level: bins along the four sides.
     const int m1 = std::max(1, int(std::floor(2 * h1 / (kRimBin * dx_))));  // bins along a1 (the sides normal to a2)
     const int m2 = std::max(1, int(std::floor(2 * h2 / (kRimBin * dx_))));  // bins along a2 (the sides normal to a1)
@@ -202,7 +164,44 @@ void DebrisCoupling::film_loads(const std::vector<CouplingNode>& nodes, const st
       if (mass[k] > 0) sum += mp[k] / mass[k];
     }
     const double pf = counted ? std::max(0.0, sum / counted) : 0.0;
-    if (!(pf > 0)) continue;
+    if (!(pf > 0)) continue;  // a dry rim: no film, whatever lies beneath
+    // Patches of the face with a solid less than a cell beneath.
+    const int n1 = std::max(1, int(std::ceil(4 * h1 / dx_))), n2 = std::max(1, int(std::ceil(4 * h2 / dx_)));
+    const double s1 = 2 * h1 / n1, s2 = 2 * h2 / n2;
+    struct Patch {
+      Eigen::Vector3d at;
+      double w;
+      int support;  // the box beneath, or -1 for a static solid
+    };
+    std::vector<Patch> patches;
+    for (int i1 = 0; i1 < n1; ++i1)
+      for (int i2 = 0; i2 < n2; ++i2) {
+        const Eigen::Vector3d P = face + (-h1 + (i1 + 0.5) * s1) * e1 + (-h2 + (i2 + 0.5) * s2) * e2;
+        // What lies at P + t dx n: -2 nothing, -1 a static solid, else the box.
+        const auto solid_at = [&](double t) {
+          const Eigen::Vector3d Q = P + t * dx_ * n;
+          if (in_static_solid(Q)) return -1;
+          const int box = box_at(Q, b);
+          return box >= 0 ? box : -2;
+        };
+        for (int k = 1; k <= kGapSteps; ++k) {
+          int support = solid_at(double(k) / kGapSteps);
+          if (support == -2) continue;
+          double lo = double(k - 1) / kGapSteps, hi = double(k) / kGapSteps;  // the surface lies between
+          for (int it = 0; it < kGapBisections; ++it) {
+            const double mid = 0.5 * (lo + hi);
+            const int at = solid_at(mid);
+            if (at == -2) {
+              lo = mid;
+            } else {
+              hi = mid;
+              support = at;
+            }
+          }
+          patches.push_back({P, 1.0 - 0.5 * (lo + hi), support});
+          break;
+        }
+      }
     for (const Patch& p : patches) {
       const Eigen::Vector3d F = -pf * p.w * s1 * s2 * n;  // pushes the face off the solid
       load[b].head<3>() += F;

@@ -5,16 +5,17 @@
 
 namespace flume::test {
 
-// A square tank (slip walls at 0 and L, floor at 0) filled to `depth`, with one cube of edge H, density rho_b.
-inline std::string tank_scene(double L, double depth, double H, double rho_b, double z_centre, double dx, double end_time,
-                       double psi = 0.0) {
+// A square tank (slip walls at 0 and L, floor at 0) filled to `depth`, with one box of edges `size` and density
+// rho_b, its centre at height z_centre.
+inline std::string tank_scene(double L, double depth, const double size[3], double rho_b, double z_centre, double dx,
+                              double end_time, double psi, double bulk_modulus) {
   const double pad = 3 * dx;
   char buf[4096];
   std::snprintf(buf, sizeof buf, R"({
     "name": "tank", "dimension": 3,
     "domain": {"lo": [%g, %g, %g], "hi": [%g, %g, %g], "walls": "slip"},
     "solver": {"dx": %g, "ppc": 8, "cfl": 0.4, "end_time": %g},
-    "fluid": {"bulk_modulus": 5e4, "jbar_psi": %g},
+    "fluid": {"bulk_modulus": %g, "jbar_psi": %g},
     "boundaries": [
       {"name": "floor", "type": "half_space", "point": [0, 0, 0], "normal": [0, 0, 1], "condition": "slip"},
       {"name": "x0", "type": "half_space", "point": [0, 0, 0], "normal": [1, 0, 0], "condition": "slip"},
@@ -25,9 +26,16 @@ inline std::string tank_scene(double L, double depth, double H, double rho_b, do
     "debris": {"density": %g, "bodies": [{"name": "D1", "size": [%g, %g, %g], "position": [%g, %g, %g]}]},
     "instruments": {"diagnostics_rate_hz": 50}
   })",
-                -pad, -pad, -pad, L + pad, L + pad, 2 * depth + pad, dx, end_time, psi, L, L, L, L, depth, rho_b, H, H,
-                H, L / 2, L / 2, z_centre);
+                -pad, -pad, -pad, L + pad, L + pad, 2 * depth + pad, dx, end_time, bulk_modulus, psi, L, L, L, L,
+                depth, rho_b, size[0], size[1], size[2], L / 2, L / 2, z_centre);
   return buf;
+}
+
+// The same with a cube of edge H in a soft fluid (K = 5e4 Pa).
+inline std::string tank_scene(double L, double depth, double H, double rho_b, double z_centre, double dx, double end_time,
+                              double psi = 0.0) {
+  const double cube[3] = {H, H, H};
+  return tank_scene(L, depth, cube, rho_b, z_centre, dx, end_time, psi, 5e4);
 }
 
 }  // namespace flume::test

@@ -79,24 +79,9 @@ struct Grounded {
   double V, A_t, A_b;
 };
 Grounded run_grounded(double depth, double dx) {
-  const double L = 0.45, pad = 3 * dx, gap = 0.0005, H = 0.06;
-  char buf[2048];
-  std::snprintf(buf, sizeof buf, R"({
-    "name": "grounded", "dimension": 3,
-    "domain": {"lo": [%g, %g, %g], "hi": [%g, %g, 0.2], "walls": "slip"},
-    "solver": {"dx": %g, "ppc": 8, "cfl": 0.4, "end_time": 2.0},
-    "fluid": {"bulk_modulus": 2e6, "jbar_psi": 0.9},
-    "boundaries": [
-      {"name": "floor", "type": "half_space", "point": [0, 0, 0], "normal": [0, 0, 1]},
-      {"name": "x0", "type": "half_space", "point": [0, 0, 0], "normal": [1, 0, 0]},
-      {"name": "x1", "type": "half_space", "point": [%g, 0, 0], "normal": [-1, 0, 0]},
-      {"name": "y0", "type": "half_space", "point": [0, 0, 0], "normal": [0, 1, 0]},
-      {"name": "y1", "type": "half_space", "point": [0, %g, 0], "normal": [0, -1, 0]}],
-    "water": [{"lo": [0, 0, 0], "hi": [%g, %g, %g]}],
-    "debris": {"density": 418.5, "bodies": [{"name": "D1", "size": [0.06, 0.15, %g], "position": [%g, %g, %g]}]}
-  })",
-                -pad, -pad, -pad, L + pad, L + pad, dx, L, L, L, L, depth, H, L / 2, L / 2, gap + H / 2);
-  auto sim = make_simulation(parse_scene_text(buf, "grounded"), {});
+  const double L = 0.45, gap = 0.0005, H = 0.06, size[3] = {0.06, 0.15, H};
+  const std::string scene = tank_scene(L, depth, size, 418.5, gap + H / 2, dx, 2.0, 0.9, 2e6);
+  auto sim = make_simulation(parse_scene_text(scene, "grounded"), {});
   while (sim->step() == RunStatus::kRunning) {
   }
   EXPECT_EQ(sim->step(), RunStatus::kOk) << "depth " << depth << ", dx " << dx << ": " << sim->message();
