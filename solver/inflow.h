@@ -140,14 +140,14 @@ class InflowBoundary {
         for (long c = b_lo; c <= b_hi && c - first[L] < width_; ++c) need[c - first[L]] = wet;
       }
     }
-    // Existing particles: buffer particles back to their slots (or removed), free water upstream removed.
+    // Existing particles: buffer particles back to their slots (or removed), free water upstream removed. The
+    // few that concern the boundary are found by the threads (in index order), then handled in that order.
     const size_t n = a_.size();
     std::vector<char> remove(n, 0);
     size_t removed = 0;
-    for (size_t i = 0; i < n; ++i) {
+    for (const size_t i : boundary_particles()) {
       const bool buffer = (*a_.tag)[i] > T(0);
       const double x = (*a_.x[0])[i];
-      if (!buffer && x >= x_in_) continue;
       e_before += energy(i);
       if (!buffer) {
         remove[i] = 1;
@@ -240,6 +240,26 @@ class InflowBoundary {
     for (long r = 0; r < layers_; ++r) u[r] += shift;
   }
 
+  // The buffer particles and the free water upstream of x_in, in index order: each of a fixed number of
+  // chunks filtered by one thread, then joined in chunk order.
+  const std::vector<size_t>& boundary_particles() {
+    const size_t n = a_.size();
+    constexpr long kChunks = 64;
+    chunk_.resize(kChunks);
+    const std::vector<T>& tag = *a_.tag;
+    const std::vector<T>& x0 = *a_.x[0];
+#pragma omp parallel for schedule(dynamic)
+    for (long c = 0; c < kChunks; ++c) {
+      std::vector<size_t>& out = chunk_[c];
+      out.clear();
+      for (size_t i = n * c / kChunks; i < n * (c + 1) / kChunks; ++i)
+        if (tag[i] > T(0) || !(double(x0[i]) >= x_in_)) out.push_back(i);
+    }
+    boundary_.clear();
+    for (const auto& part : chunk_) boundary_.insert(boundary_.end(), part.begin(), part.end());
+    return boundary_;
+  }
+
   // Slot c of a line lies at x_in + phi - (c + 1/2) s: this is the largest c at or past x_in.
   long col_floor(double phi) const { return static_cast<long>(std::floor(phi / s_ - 0.5)); }
   double y_of(long k) const { return D == 3 ? f_.y_lo + (k + 0.5) * sy_ : 0.0; }
@@ -272,21 +292,24 @@ class InflowBoundary {
   }
 
   void compact(const std::vector<char>& remove) {
-    auto squeeze = [&](std::vector<T>& a) {
+    std::vector<std::vector<T>*> arrays;
+    for (int d = 0; d < D; ++d) {
+      arrays.push_back(a_.x[d]);
+      arrays.push_back(a_.v[d]);
+    }
+    for (int q = 0; q < D * D; ++q) arrays.push_back(a_.C[q]);
+    arrays.push_back(a_.e);
+    arrays.push_back(a_.vol);
+    if (!a_.held->empty()) arrays.push_back(a_.held);
+    arrays.push_back(a_.tag);
+#pragma omp parallel for schedule(dynamic)
+    for (long k = 0; k < long(arrays.size()); ++k) {  // each array squeezed by one thread
+      std::vector<T>& a = *arrays[k];
       size_t w = 0;
       for (size_t i = 0; i < a.size(); ++i)
         if (!remove[i]) a[w++] = a[i];
       a.resize(w);
-    };
-    for (int d = 0; d < D; ++d) {
-      squeeze(*a_.x[d]);
-      squeeze(*a_.v[d]);
     }
-    for (int q = 0; q < D * D; ++q) squeeze(*a_.C[q]);
-    squeeze(*a_.e);
-    squeeze(*a_.vol);
-    if (!a_.held->empty()) squeeze(*a_.held);
-    squeeze(*a_.tag);
   }
 
   const InflowSettings& f_;
@@ -298,6 +321,8 @@ class InflowBoundary {
   long across_ = 1, layers_ = 1, width_ = 1;  // lattice lines across y and up z; slots per line
   std::vector<double> phi_, carry_;           // per line k * layers_ + r: phase (m) and the error diffusion
   std::vector<char> need_, have_;             // per line and slot, this step
+  std::vector<std::vector<size_t>> chunk_;    // boundary_particles' work
+  std::vector<size_t> boundary_;
   double injected_ = 0, absorbed_ = 0;
 };
 
