@@ -10,7 +10,7 @@
 # Environment: FLUME (build/bin/flume), OUT (debris-apron), THREADS (2), DX, DX0, END_TIME, GATE (0.10 m), FEED_DX.
 # The apron runs checkpoint every 10 min (docs/checkpoints.md): run the script again after a kill and each goes
 # on from its checkpoint. Cost on the 2-core VM, 12 s: feed about 13 min at 0.01 m (1 thread); 0x0 at 0.03 m about 50 min
-# (1 thread); 5x2 at 0.02 m several hours (session 7: 7 s in 82 min on 2 threads).
+# (1 thread); 5x2 at 0.02 m about 2 h on 2 threads (session 11, commit e0dee22: 7,154 s, partly beside other jobs).
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
 FLUME=${FLUME:-$ROOT/build/bin/flume}
