@@ -2,7 +2,7 @@
 # Solver speed on a thin sheet flow: the Waseda apron with six containers and the 5x2 columns at dx 0.02 m,
 # resumed from a checkpoint of `docs/debris_waseda_apron.sh feed 5x2` (its apron_5x2/checkpoint.bin, taken
 # while the bore runs over the apron) up to END seconds of simulated time, once per flume binary given.
-# Prints, per binary, the steps taken, the wall seconds of the whole command (the checkpoint's read and the
+# Prints, per binary, the step it reaches, the wall seconds of the whole command (the checkpoint's read and the
 # final write included), and whether its result.h5 equals the first binary's (h5diff; the load cells' and the
 # energies' OpenMP sums may differ by round-off with more than one thread, tests/solver/test_threads.cpp).
 #

@@ -15,7 +15,6 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
-#include <numeric>
 #include <sstream>
 
 #include <Eigen/Core>
@@ -604,6 +603,17 @@ class MpmSolver final : public Simulation {
     }
     return box;
   }
+  // Calls row(a, len) for each row of the box along the last axis: its first tile node and its length.
+  template <typename Row>
+  static void for_each_box_row(const TileBox& box, Row&& row) {
+    const int len = box.hi[D - 1] - box.lo[D - 1];
+    if constexpr (D == 2) {
+      for (int a0 = box.lo[0]; a0 < box.hi[0]; ++a0) row(a0 * kTile + box.lo[1], len);
+    } else {
+      for (int a0 = box.lo[0]; a0 < box.hi[0]; ++a0)
+        for (int a1 = box.lo[1]; a1 < box.hi[1]; ++a1) row((a0 * kTile + a1) * kTile + box.lo[2], len);
+    }
+  }
 
   // P2G: each particle block scatters mass, momentum (with the MLS-MPM stress term) and mass-weighted strain J - 1
   // into its private tile, node-major with kLanes channels per node.
@@ -627,16 +637,7 @@ class MpmSolver final : public Simulation {
       T* tile = &tiles_[static_cast<size_t>(p) * kLanes * kTileNodes];
       const TileBox box = tile_box(p, lo_grid, inv_dx);
       tile_box_[p] = box;
-      if constexpr (D == 2) {
-        for (int a0 = box.lo[0]; a0 < box.hi[0]; ++a0)
-          std::fill(tile + (a0 * kTile + box.lo[1]) * kLanes, tile + (a0 * kTile + box.hi[1]) * kLanes, T(0));
-      } else {
-        for (int a0 = box.lo[0]; a0 < box.hi[0]; ++a0)
-          for (int a1 = box.lo[1]; a1 < box.hi[1]; ++a1) {
-            const int row = (a0 * kTile + a1) * kTile;
-            std::fill(tile + (row + box.lo[2]) * kLanes, tile + (row + box.hi[2]) * kLanes, T(0));
-          }
-      }
+      for_each_box_row(box, [&](int a, int len) { std::fill_n(tile + a * kLanes, len * kLanes, T(0)); });
       int blk[D], origin[D];
       unpack_key<D>(pkeys_[p], blk);
       for (int d = 0; d < D; ++d) origin[d] = blk[d] * kBlock - 1;
@@ -1189,9 +1190,8 @@ class MpmSolver final : public Simulation {
     }
     const int nbodies = debris_ ? debris_->body_count() : 0;
     // Only the blocks near a box can push particles out: they zero their own slots in the loop and are flagged,
-    // and only they are summed after it. A block far from every box would add exact zeros, so the sums are the
-    // same as over every block, but a serial pass over all blocks' slots (strided, a cache line each) took a
-    // third of a step on the Waseda apron (perf).
+    // and only they are summed after it (a block far from every box would add exact zeros), instead of zeroing
+    // and summing every block's slots serially each step.
     if (debris_) {
       push_out_.resize(static_cast<size_t>(nblocks) * nbodies * 6);
       push_near_.assign(static_cast<size_t>(nblocks), 0);
@@ -1222,15 +1222,9 @@ class MpmSolver final : public Simulation {
         t[D + 2] = free;
         for (int c = D + 3; c < kLanes; ++c) t[c] = T(0);
       };
-      const TileBox& box = tile_box_[p];
-      if constexpr (D == 2) {
-        for (int a0 = box.lo[0]; a0 < box.hi[0]; ++a0)
-          for (int a1 = box.lo[1]; a1 < box.hi[1]; ++a1) fetch(a0 * kTile + a1);
-      } else {
-        for (int a0 = box.lo[0]; a0 < box.hi[0]; ++a0)
-          for (int a1 = box.lo[1]; a1 < box.hi[1]; ++a1)
-            for (int a2 = box.lo[2]; a2 < box.hi[2]; ++a2) fetch((a0 * kTile + a1) * kTile + a2);
-      }
+      for_each_box_row(tile_box_[p], [&](int a, int len) {
+        for (int k = 0; k < len; ++k) fetch(a + k);
+      });
       // The stencil weights of a batch of particles first, in a loop of their own; then the gather and update
       // one particle at a time.
       for (uint32_t b0 = pstart_[p]; b0 < pstart_[p + 1]; b0 += kBatch) {
