@@ -68,6 +68,8 @@ std::vector<DebrisState> debris_of(const std::map<std::string, double>& m) {
       d.spreading_rest = std::atan2(d.y_rest - d.y0, d.x_rest - d.x0) * kDeg;
     double dammed = 0;
     d.dammed = get("dammed", dammed) && dammed > 0.5;
+    double at_rest = 0;
+    if (get("at_rest", at_rest)) d.at_rest = at_rest > 0.5 ? 1 : 0;
     out.push_back(d);
   }
   return out;
@@ -78,8 +80,11 @@ std::map<std::string, double> derived_debris_metrics(const std::vector<DebrisSta
   std::map<std::string, double> m;
   if (debris.empty()) return m;
   std::vector<double> lmax, lrest;
-  double s_run = 0, s_rest = 0, r_run = -1e300, r_rest = -1e300, dammed = 0;
+  double s_run = 0, s_rest = 0, r_run = -1e300, r_rest = -1e300, dammed = 0, moving = 0;
+  bool rest_known = true;
   for (const auto& d : debris) {
+    rest_known &= d.at_rest >= 0;
+    moving += d.at_rest == 0;
     s_run = std::max(s_run, std::abs(d.spreading_runup));
     s_rest = std::max(s_rest, std::abs(d.spreading_rest));
     r_run = std::max(r_run, d.x_runup - quay_x_m);
@@ -96,6 +101,7 @@ std::map<std::string, double> derived_debris_metrics(const std::vector<DebrisSta
   m["debris.runout_runup_max_m"] = r_run;
   m["debris.runout_rest_max_m"] = r_rest;
   m["debris.dammed_count"] = dammed;
+  if (rest_known) m["debris.moving_count"] = moving;
   return m;
 }
 
@@ -122,7 +128,7 @@ DebrisAnalysis analyse_debris(const CampaignData& data, const std::vector<std::s
     double sx = 0, sy = 0;
     std::size_t count = 0;
     std::size_t naito_run = 0, naito_rest = 0, nistor_run = 0, nistor_rest = 0, long_above = 0,
-                any_dammed = 0;
+                any_dammed = 0, any_moving = 0, rest_known = 0;
     std::size_t debris_total = 0, debris_naito_run = 0, debris_naito_rest = 0;
     std::vector<double> runout_run, runout_rest;
     const auto& geo = g.geometry;
@@ -141,6 +147,10 @@ DebrisAnalysis analyse_debris(const CampaignData& data, const std::vector<std::s
       nistor_rest += s_rest > theta_n;
       long_above += derived.at("debris.longitudinal_max_median_m") > long_n;
       any_dammed += derived.at("debris.dammed_count") > 0;
+      if (const auto it = derived.find("debris.moving_count"); it != derived.end()) {
+        ++rest_known;
+        any_moving += it->second > 0;
+      }
       runout_run.push_back(derived.at("debris.runout_runup_max_m"));
       runout_rest.push_back(derived.at("debris.runout_rest_max_m"));
       std::set<int> cells_run, cells_rest;  // a run counts once per cell, however many debris are in it
@@ -176,6 +186,11 @@ DebrisAnalysis analyse_debris(const CampaignData& data, const std::vector<std::s
                   long_n, g.n_debris);
     g.probabilities.push_back(proportion(buf, long_above, n, c));
     g.probabilities.push_back(proportion("P(at least one debris dammed)", any_dammed, n, c));
+    // The "rest" positions above are where the debris were when the run ended: this says how often that was
+    // not yet rest (runs of an older solver, without D<k>.at_rest, are left out of it).
+    if (rest_known > 0)
+      g.probabilities.push_back(proportion("P(a debris not at rest when the run ended: its 'rest' is where it was then)",
+                                           any_moving, rest_known, c));
     g.probabilities.push_back(
         proportion("fraction of debris with |spreading at run-up| > 22.5 deg (no CI: debris of a run are not "
                    "independent)",

@@ -2,7 +2,7 @@
 // guidelines, and probabilities over the runs. Metric names are the solver's contract, per debris
 // k = 1..6: D<k>.initial_x_m, .initial_y_m, .runup_x_m, .runup_y_m, .rest_x_m, .rest_y_m,
 // .longitudinal_max_m, .longitudinal_rest_m, .lateral_runup_m, .lateral_rest_m, .spreading_runup_deg,
-// .spreading_rest_deg, .dammed, .accel_peak_force_n, .accel_peak_force_30hz_n.
+// .spreading_rest_deg, .dammed, .at_rest, .accel_peak_force_n, .accel_peak_force_30hz_n.
 //   Naito et al. (2014): spreading angle within +-22.5 degrees (a conservative design guideline).
 //   Nistor et al. (2017), as eq. 59 of the comparative study: +-(3.69 + 0.80 N) degrees, N debris.
 //   Nistor et al. (2017), eq. 58: median longitudinal displacement 3.58 - 0.09 N metres.
@@ -28,6 +28,7 @@ struct DebrisState {
   double longitudinal_max = 0, longitudinal_rest = 0;
   double spreading_runup = 0, spreading_rest = 0;  // degrees, signed
   bool dammed = false;
+  int at_rest = -1;  // 1: at rest at the end of its run (D<k>.at_rest), 0: still moving, -1: not recorded
 };
 
 struct DebrisRun {
@@ -44,7 +45,8 @@ std::vector<DebrisState> debris_of(const std::map<std::string, double>& metrics)
 //   debris.count, debris.spreading_runup_max_abs_deg, debris.spreading_rest_max_abs_deg,
 //   debris.longitudinal_max_median_m, debris.longitudinal_rest_median_m,
 //   debris.runout_runup_max_m, debris.runout_rest_max_m (farthest debris past the quay wall),
-//   debris.dammed_count.
+//   debris.dammed_count, and debris.moving_count (debris not at rest at the end) where every debris has
+//   D<k>.at_rest.
 std::map<std::string, double> derived_debris_metrics(const std::vector<DebrisState>& debris, double quay_x_m);
 
 struct Probability {

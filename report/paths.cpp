@@ -35,6 +35,8 @@ struct DebrisPath {
   double x0 = 0, y0 = 0, x_runup = 0, y_runup = 0, x_rest = 0, y_rest = 0;
   double longitudinal_max = 0, longitudinal_rest = 0, lateral_runup = 0, lateral_rest = 0;
   double spreading_runup = 0, spreading_rest = 0;
+  double final_speed = std::nan("");  // m/s at the end of the run
+  int at_rest = -1;                   // D<k>.at_rest: 1, 0, or -1 for a run written before it existed
   bool dammed = false;
 };
 
@@ -43,6 +45,7 @@ struct RunPaths {
   ApronGeometry geometry;
   std::vector<DebrisPath> debris;
   double apex_x = 0, apex_y = 0;
+  double rest_speed_m_s = 0.01, rest_hold_s = 1.0;  // debris.rest_speed_m_s, debris.rest_hold_s of the scene
 };
 
 // A dotted path in the run's scene JSON, or the default.
@@ -106,6 +109,8 @@ RunPaths read_run(const std::string& dir, const std::vector<Override>& sets) {
   g.y_hi_m = scene_value<double>(scene, "basin.width_m", g.y_hi_m);
   g.layout = r.layout;
   g.layout_source = "scene";
+  r.rest_speed_m_s = scene_value<double>(scene, "debris.rest_speed_m_s", r.rest_speed_m_s);
+  r.rest_hold_s = scene_value<double>(scene, "debris.rest_hold_s", r.rest_hold_s);
   g.obstacles = obstacle_layout(r.layout, 0.5 * (g.y_lo_m + g.y_hi_m));
 
   const json metrics = run.value("metrics", json::object());
@@ -135,6 +140,8 @@ RunPaths read_run(const std::string& dir, const std::vector<Override>& sets) {
     p.spreading_runup = m("spreading_runup_deg");
     p.spreading_rest = m("spreading_rest_deg");
     p.dammed = metrics.contains(name + ".dammed") && metrics[name + ".dammed"].get<double>() > 0.5;
+    if (metrics.contains(name + ".final_speed_m_s")) p.final_speed = m("final_speed_m_s");
+    if (metrics.contains(name + ".at_rest")) p.at_rest = m("at_rest") > 0.5 ? 1 : 0;
     r.apex_x += p.x0;
     r.apex_y += p.y0;
     r.debris.push_back(std::move(p));
@@ -185,13 +192,17 @@ void print_run(const RunPaths& r) {
   const int n = static_cast<int>(r.debris.size());
   std::printf("%s (%s, obstacles %s, %d debris; apex %.3f, %.3f m)\n", r.dir.c_str(), r.scene_name.c_str(),
               r.layout.c_str(), n, r.apex_x, r.apex_y);
-  std::printf("  debris  long_max_m  long_rest_m  lat_runup_m  lat_rest_m  angle_runup_deg  angle_rest_deg  dammed\n");
+  std::printf(
+      "  debris  long_max_m  long_rest_m  lat_runup_m  lat_rest_m  angle_runup_deg  angle_rest_deg  dammed  "
+      "speed_end_m_s  at_rest\n");
   double sum = 0;
-  int naito = 0, nistor = 0;
+  int naito = 0, nistor = 0, moving = 0;
   for (const auto& p : r.debris) {
-    std::printf("  %-6s  %10.3f  %11.3f  %11.3f  %10.3f  %15.2f  %14.2f  %s\n", p.name.c_str(), p.longitudinal_max,
-                p.longitudinal_rest, p.lateral_runup, p.lateral_rest, p.spreading_runup, p.spreading_rest,
-                p.dammed ? "yes" : "no");
+    std::printf("  %-6s  %10.3f  %11.3f  %11.3f  %10.3f  %15.2f  %14.2f  %6s  %13.3f  %7s\n", p.name.c_str(),
+                p.longitudinal_max, p.longitudinal_rest, p.lateral_runup, p.lateral_rest, p.spreading_runup,
+                p.spreading_rest, p.dammed ? "yes" : "no", p.final_speed,
+                p.at_rest < 0 ? "?" : p.at_rest ? "yes" : "no");
+    moving += p.at_rest == 0;
     sum += p.longitudinal_max;
     for (double a : {p.spreading_runup, p.spreading_rest}) {
       naito += std::fabs(a) > kNaitoSpreadingDeg;
@@ -203,6 +214,10 @@ void print_run(const RunPaths& r) {
               100.0 * (mean - eq58) / eq58);
   std::printf("  angles (run-up and rest, %d) beyond Naito 22.5 deg: %d; beyond Nistor eq. 59 %.2f deg: %d\n", 2 * n,
               naito, nistor_spreading_deg(n), nistor);
+  if (moving > 0)
+    std::printf("  %d of %d not at rest at the end (slower than %g m/s over the run's last %g s): their 'rest' columns "
+                "are end-of-run positions\n",
+                moving, n, r.rest_speed_m_s, r.rest_hold_s);
 }
 
 }  // namespace

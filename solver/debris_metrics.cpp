@@ -53,7 +53,8 @@ double debris_column_gap(const Eigen::Vector3d& c, const Eigen::Quaterniond& q, 
 
 std::map<std::string, double> debris_metrics(const Scene& scene, const DebrisRecorder& recorder, double dam_gap_m) {
   std::map<std::string, double> m;
-  int mobilised = 0, dammed = 0;
+  int mobilised = 0, dammed = 0, at_rest = 0;
+  const double v_rest = scene.debris.rest_speed_m_s, hold = scene.debris.rest_hold_s;
   for (int b = 0; b < recorder.body_count(); ++b) {
     const std::string k = recorder.name(b) + ".";
     const DebrisSeries& s = recorder.solver_rate(b);
@@ -81,6 +82,15 @@ std::map<std::string, double> debris_metrics(const Scene& scene, const DebrisRec
     m[k + "spreading_runup_deg"] = std::atan2(lat_run, lon_max) * kDeg;
     m[k + "spreading_rest_deg"] = std::atan2(lat_rest, lon_rest) * kDeg;
     m[k + "final_speed_m_s"] = norm3(s.velocity.back());
+    // At rest: slower than v_rest from moving_until on, for at least `hold` before the record ends. A debris
+    // never faster than v_rest has moving_until at the record's start.
+    double moving_until = s.time.front();
+    for (size_t i = 0; i < s.size(); ++i)
+      if (norm3(s.velocity[i]) > v_rest) moving_until = s.time[i];
+    const bool rest = norm3(s.velocity.back()) <= v_rest && s.time.back() - moving_until >= hold;
+    m[k + "moving_until_s"] = moving_until;
+    m[k + "at_rest"] = rest ? 1.0 : 0.0;
+    at_rest += rest;
     double peak = 0, peak30 = 0;
     for (const auto& f : s.force) peak = std::max(peak, norm3(f));
     for (const auto& f : r.force) peak30 = std::max(peak30, norm3(f));
@@ -103,6 +113,7 @@ std::map<std::string, double> debris_metrics(const Scene& scene, const DebrisRec
     dammed += dam;
   }
   m["debris.mobilised_count"] = mobilised;
+  m["debris.at_rest_count"] = at_rest;
   (void)dammed;  // the report derives debris.dammed_count from the per-debris flags
   return m;
 }

@@ -531,7 +531,8 @@ void expand_debris_layout(json& root, Basin& B, DebrisSettings& layout, const st
   for (int a = 0; a < 3; ++a)
     if (!(size[a] > 0)) r.fail("size_m", "edge lengths must be > 0");
   const double gap = r.number("gap_m", 0.03, 0.0, 1.0);
-  for (const char* k : {"friction", "restitution", "density", "resample_hz", "record_rate_hz"})
+  for (const char* k : {"friction", "restitution", "density", "resample_hz", "record_rate_hz", "rest_speed_m_s",
+                        "rest_hold_s"})
     if (r.has(k)) r.accept(k);
   r.finish();
   const int per_layer = 3;
@@ -790,6 +791,8 @@ Scene parse(const json& root_json, const std::string& file) {
     D.density = r.number("density", D.density, 1.0, 1e5);
     D.resample_hz = r.number("resample_hz", 30.0, 0.0, 1e6, true, false);
     D.record_rate_hz = r.number("record_rate_hz", 1000.0, 0.0, 1e7);
+    D.rest_speed_m_s = r.number("rest_speed_m_s", D.rest_speed_m_s, 0.0, 10.0, true);
+    D.rest_hold_s = r.number("rest_hold_s", D.rest_hold_s, 0.0, 1e4);
     auto list = r.array("bodies");
     if (list.empty()) r.fail("bodies", "is required: a non-empty array of boxes {name, size, position}");
     std::set<std::string> names;

@@ -141,6 +141,10 @@ struct DebrisSettings {
   double row_x_m = 0.0;
   double resample_hz = 30.0;      // the experiment's accelerometer rate
   double record_rate_hz = 1000.0; // solver-rate trajectory samples kept per second (0: every step)
+  // At rest at the end of a run: slower than rest_speed_m_s over the run's last rest_hold_s (metrics
+  // <k>.at_rest, <k>.moving_until_s, debris.at_rest_count). 1 cm/s at 1:40 is 6 cm/s full scale.
+  double rest_speed_m_s = 0.01;
+  double rest_hold_s = 1.0;
   std::vector<DebrisBody> bodies;
 };
 

@@ -359,11 +359,14 @@ TEST(ReportDebris, ProbabilitiesPresenceAndRunOutFromKnownPositions) {
           "design": {"type": "monte_carlo", "samples": 4}, "seed": 1})",
       [](const std::vector<double>&, std::int64_t i) {
         const double deg = (10.0 + 10.0 * i) * M_PI / 180, L = 2.0;
-        return flume::test::ok_outcome(debris_run({
+        auto m = debris_run({
             {4.7, 2.0, 4.7 + L, 2.0 + L * std::tan(deg), 6.0 + 0.5 * i, 2.1},  // the spreading one
             {4.7, 1.8, 6.7, 1.8, 6.0 + 0.5 * i, 1.8},                          // straight on
             {4.7, 2.2, 6.7, 2.2, 5.0, 2.2},                                    // always rests at x = 5
-        }));
+        });
+        // All at rest at the end but in run 3, whose debris 2 still moves.
+        for (int k = 1; k <= 3; ++k) m.push_back({"D" + std::to_string(k) + ".at_rest", i == 3 && k == 2 ? 0.0 : 1.0});
+        return flume::test::ok_outcome(m);
       });
   ReportOptions o = options_for(dir / "study.db", "deb", dir / "out");
   o.cell_m = 0.25;
@@ -393,6 +396,9 @@ TEST(ReportDebris, ProbabilitiesPresenceAndRunOutFromKnownPositions) {
   EXPECT_EQ(prob("P(a spreading angle at rest > 6.09 deg").count, 0u);
   // Eq. 58 for N = 3: 3.31 m; every median longitudinal displacement here is 2 m.
   EXPECT_EQ(prob("P(median longitudinal displacement > 3.31 m").count, 0u);
+  const Probability moving = prob("P(a debris not at rest when the run ended");
+  EXPECT_EQ(moving.count, 1u);
+  EXPECT_EQ(moving.n, 4u);
 
   // Presence: the cell holding (5.0, 2.2) has a debris at rest in every run; the one at (6.0, 2.1) in run 0
   // only.
@@ -414,6 +420,7 @@ TEST(ReportDebris, ProbabilitiesPresenceAndRunOutFromKnownPositions) {
   EXPECT_NEAR(g.runout_rest.x.back(), 7.5 - 4.45, 1e-12);
   // The derived per-run metric gets statistics of its own.
   EXPECT_NEAR(metric(r, "debris.runout_rest_max_m").summary->mean.value, 6.75 - 4.45, 1e-12);
+  EXPECT_NEAR(metric(r, "debris.moving_count").summary->mean.value, 0.25, 1e-12);
   EXPECT_NE(read_file(dir / "out" / "debris_positions.csv").find("5x2,3,"), std::string::npos);
 }
 
@@ -571,7 +578,10 @@ TEST(DebrisPaths, DrawsARunsDebrisWithTheGuidelines) {
       run({FLUME_EXE, "debris-paths", (dir / "strip").string(), "--out", (dir / "paths.svg").string()}, dir);
   ASSERT_EQ(p.rc, 0) << p.err;
   for (const char* want :
-       {"waseda_strip, obstacles 0x0, 3 debris", "D1", "D2", "D3", "Nistor eq. 58 (3.58 - 0.09 N) 3.310 m"})
+       {"waseda_strip, obstacles 0x0, 3 debris", "D1", "D2", "D3", "Nistor eq. 58 (3.58 - 0.09 N) 3.310 m",
+        "speed_end_m_s  at_rest",
+        // 0.1 s is shorter than the 1 s a debris must stay slower than 1 cm/s to count as at rest
+        "3 of 3 not at rest at the end (slower than 0.01 m/s over the run's last 1 s)"})
     EXPECT_NE(p.out.find(want), std::string::npos) << want << " in\n" << p.out;
   const std::string svg = read_file(dir / "paths.svg");
   for (const char* want : {"Naito 22.5 deg", "Nistor eq. 59: 6.09 deg", "Nistor eq. 58: 3.31 m", "initial"})

@@ -282,6 +282,22 @@ TEST(Metrics, ReadASlideToRest) {
   // Peak accelerometer force: the friction force mu m g while it slides (and no impact).
   EXPECT_NEAR(m.at("D1.accel_peak_force_30hz_n"), 0.5 * 0.226 * kG, 0.05 * 0.5 * 0.226 * kG);
   EXPECT_EQ(m.at("debris.mobilised_count"), 1.0);
+  // Rest: the speed falls as |v0| - mu g t, so it drops below rest_speed_m_s (1 cm/s) at (|v0| - 0.01) / (mu g)
+  // = 0.263 s and the box then lies still for the rest of the 0.8 s record (0.537 s).
+  const double moving_until = (std::sqrt(v2) - scene.debris.rest_speed_m_s) / (0.5 * kG);
+  std::printf("slide: slower than 1 cm/s from %.4f s (%.4f)\n", m.at("D1.moving_until_s"), moving_until);
+  EXPECT_NEAR(m.at("D1.moving_until_s"), moving_until, 0.02 * moving_until);
+  EXPECT_EQ(m.at("D1.at_rest"), 0.0);  // the default hold, 1 s, is longer than the 0.537 s it lay still
+  scene.debris.rest_hold_s = 0.5;
+  EXPECT_EQ(debris_metrics(scene, rec, 0.002).at("D1.at_rest"), 1.0);
+  EXPECT_EQ(debris_metrics(scene, rec, 0.002).at("debris.at_rest_count"), 1.0);
+  scene.debris.rest_hold_s = 0.6;
+  EXPECT_EQ(debris_metrics(scene, rec, 0.002).at("D1.at_rest"), 0.0);
+  scene.debris.rest_hold_s = 0.5;
+  scene.debris.rest_speed_m_s = 0.1;  // a looser threshold is met earlier: (|v0| - 0.1) / (mu g) = 0.245 s
+  const double until_loose = (std::sqrt(v2) - 0.1) / (0.5 * kG);
+  EXPECT_NEAR(debris_metrics(scene, rec, 0.002).at("D1.moving_until_s"), until_loose, 0.02 * until_loose);
+  scene.debris.rest_speed_m_s = 0.01;
 
   // The same slide ending against a column placed across its path.
   const double xr = 1.0 + dx_expected, yr = 1.0 + dy_expected;
