@@ -1,13 +1,14 @@
 #!/usr/bin/env bash
 # Issue 4 point 5: the Waseda apron fed by a 2D run, six upstream containers in two layers, and their top-down
 # paths with the Naito (2014) cone and the Nistor (2017) eq. 58/59 guidelines (docs/debris.md, "The Waseda apron").
-#   feed    scenes/waseda/waseda_2d.json at FEED_DX (0.01 m), FEED_END (END_TIME) s, gate GATE: the section record at x = 4.35 m
+#   feed    scenes/waseda/waseda_2d.json at FEED_DX (0.01 m), FEED_END (END_TIME) s, gate GATE, reservoir filled to FILL
+#           (0.90 m, the study's nominal value; its STAR-CCM+ twin used 0.67 m): the section record at x = 4.35 m
 #           (at dx 0.02 m the 2D basin passes half the water over the quay that it does at 0.01 m: docs/debris.md)
 #   5x2     scenes/waseda/waseda_apron.json, 5x2 columns, dx = DX (0.02 m), END_TIME (12 s) simulated
 #   0x0     the same without obstacles at DX0 (0.03 m: the eq. 58 comparison)
 #   paths   flume debris-paths over both runs -> $OUT/debris_paths.svg and the metric tables
 # Usage: docs/debris_waseda_apron.sh [feed 5x2 0x0 paths]   (default: all four)
-# Environment: FLUME (build/bin/flume), OUT (debris-apron), THREADS (2), DX, DX0, END_TIME, GATE (0.10 m), FEED_DX,
+# Environment: FLUME (build/bin/flume), OUT (debris-apron), THREADS (2), DX, DX0, END_TIME, GATE (0.10 m), FILL, FEED_DX,
 # FEED_END (END_TIME; the apron cannot run past the feed's record, whose last reading it would hold; a finished
 # feed is kept whatever its length: remove OUT/feed2d to change it).
 # The apron runs checkpoint every 10 min (docs/checkpoints.md): run the script again after a kill and each goes
@@ -22,6 +23,7 @@ DX=${DX:-0.02}
 DX0=${DX0:-0.03}
 END_TIME=${END_TIME:-12}
 GATE=${GATE:-0.10}
+FILL=${FILL:-0.90}
 FEED_DX=${FEED_DX:-0.01}
 FEED_END=${FEED_END:-$END_TIME}
 STEPS=("$@")
@@ -32,7 +34,7 @@ want() { for s in "${STEPS[@]}"; do [ "$s" = "$1" ] && return 0; done; return 1;
 debris=(--set debris.count=6 --set debris.layers=2 --set debris.placement=upstream)
 if want feed && ! grep -qs '"status": "ok"' feed2d/run.json; then  # a finished feed is kept
   "$FLUME" run "$ROOT/scenes/waseda/waseda_2d.json" --out feed2d --set solver.dx="$FEED_DX" --set solver.end_time="$FEED_END" \
-    --set reservoir.gate_height_m="$GATE" --threads "$THREADS"
+    --set reservoir.gate_height_m="$GATE" --set reservoir.fill_level_m="$FILL" --threads "$THREADS"
 fi
 apron() {  # apron NAME LAYOUT DX
   local resume=()
