@@ -81,13 +81,14 @@ std::map<std::string, double> debris_metrics(const Scene& scene, const DebrisRec
     m[k + "lateral_rest_m"] = lat_rest;
     m[k + "spreading_runup_deg"] = std::atan2(lat_run, lon_max) * kDeg;
     m[k + "spreading_rest_deg"] = std::atan2(lat_rest, lon_rest) * kDeg;
-    m[k + "final_speed_m_s"] = norm3(s.velocity.back());
+    const double v_end = norm3(s.velocity.back());
+    m[k + "final_speed_m_s"] = v_end;
     // At rest: slower than v_rest from moving_until on, for at least `hold` before the record ends. A debris
     // never faster than v_rest has moving_until at the record's start.
     double moving_until = s.time.front();
     for (size_t i = 0; i < s.size(); ++i)
       if (norm3(s.velocity[i]) > v_rest) moving_until = s.time[i];
-    const bool rest = norm3(s.velocity.back()) <= v_rest && s.time.back() - moving_until >= hold;
+    const bool rest = v_end <= v_rest && s.time.back() - moving_until >= hold;  // v_end: for hold = 0
     m[k + "moving_until_s"] = moving_until;
     m[k + "at_rest"] = rest ? 1.0 : 0.0;
     at_rest += rest;
