@@ -168,6 +168,9 @@ void draw_run(plot::Axes& ax, const RunPaths& r) {
   std::snprintf(lab, sizeof lab, "Nistor eq. 58: %.2f m", nistor_longitudinal_m(n));
   if (x58 < r.geometry.end_x_m) ax.vline(x58, {.color = grey, .width = 1.2, .dash = plot::Dash::kDashDot, .label = lab});
   std::vector<double> x0, y0;
+  // The end of the run is a rest position only where the debris has come to rest (D<k>.at_rest; a run without
+  // the flag counts as at rest, as it was drawn before): the others are marked apart, as still moving.
+  bool rest_labelled = false, moving_labelled = false;
   for (std::size_t k = 0; k < r.debris.size(); ++k) {
     const DebrisPath& p = r.debris[k];
     // Okabe & Ito's blue, orange, green, sky blue, then brown and grey: not the cones' colours.
@@ -178,8 +181,14 @@ void draw_run(plot::Axes& ax, const RunPaths& r) {
     ax.text(p.x_runup + 0.05, p.y_runup, p.name, {.size = 10.0, .color = c});  // named at its run-up, not in the legend
     ax.scatter({p.x_runup}, {p.y_runup},
                {.color = c, .marker = plot::Marker::kCircle, .size = 7, .label = k == 0 ? "run-up (circles)" : ""});
+    const bool moving = p.at_rest == 0;
+    bool& labelled = moving ? moving_labelled : rest_labelled;
     ax.scatter({p.x_rest}, {p.y_rest},
-               {.color = c, .marker = plot::Marker::kDiamond, .size = 7, .label = k == 0 ? "rest (diamonds)" : ""});
+               {.color = c,
+                .marker = moving ? plot::Marker::kCross : plot::Marker::kDiamond,
+                .size = 7,
+                .label = labelled ? "" : moving ? "end of run, still moving (crosses)" : "rest (diamonds)"});
+    labelled = true;
     x0.push_back(p.x0);
     y0.push_back(p.y0);
   }

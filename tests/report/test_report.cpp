@@ -584,8 +584,10 @@ TEST(DebrisPaths, DrawsARunsDebrisWithTheGuidelines) {
         "3 of 3 not at rest at the end (slower than 0.01 m/s over the run's last 1 s)"})
     EXPECT_NE(p.out.find(want), std::string::npos) << want << " in\n" << p.out;
   const std::string svg = read_file(dir / "paths.svg");
-  for (const char* want : {"Naito 22.5 deg", "Nistor eq. 59: 6.09 deg", "Nistor eq. 58: 3.31 m", "initial"})
+  for (const char* want : {"Naito 22.5 deg", "Nistor eq. 59: 6.09 deg", "Nistor eq. 58: 3.31 m", "initial",
+                           "end of run, still moving (crosses)"})
     EXPECT_NE(svg.find(want), std::string::npos) << want;
+  EXPECT_EQ(svg.find("rest (diamonds)"), std::string::npos) << "none of the three is at rest after 0.1 s";
 
   // Bad input: a folder that is not a run, an option out of place; exit 2 and the file named.
   const Result missing =
