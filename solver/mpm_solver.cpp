@@ -818,7 +818,11 @@ class MpmSolver final : public Simulation {
       if (c.body >= 0) {
         c.id = idx;
         c.m = double(m);
-        c.p = law_d_.pressure(double(acc[1 + D] / m));
+        // The node holds the strain less its hydrostatic part (mpm::hydrostatic_strain, the well-balanced
+        // J-bar); the pressure is the equation of state at the whole strain.
+        double e_h = 0;
+        for (int d = 0; d < D; ++d) e_h += double(strain_slope_[d]) * c.x[d];
+        c.p = law_d_.pressure(double(acc[1 + D] / m) + e_h);
         for (int d = 0; d < D; ++d) c.v[d] = double(v[d]);
         my_coupling->push_back(c);
         on_wall = 1;
