@@ -820,9 +820,9 @@ class MpmSolver final : public Simulation {
         c.m = double(m);
         // The node holds the strain less its hydrostatic part (mpm::hydrostatic_strain, the well-balanced
         // J-bar); the pressure is the equation of state at the whole strain.
-        double e_h = 0;
-        for (int d = 0; d < D; ++d) e_h += double(strain_slope_[d]) * c.x[d];
-        c.p = law_d_.pressure(double(acc[1 + D] / m) + e_h);
+        double slope[D];
+        for (int d = 0; d < D; ++d) slope[d] = double(strain_slope_[d]);
+        c.p = law_d_.pressure(double(acc[1 + D] / m) + mpm::hydrostatic_strain<D>(c.x, slope));
         for (int d = 0; d < D; ++d) c.v[d] = double(v[d]);
         my_coupling->push_back(c);
         on_wall = 1;

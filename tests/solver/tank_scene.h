@@ -29,8 +29,9 @@ inline std::string tank_scene(double L, double depth, const double size[3], doub
     "debris": {"density": %g, "bodies": [{"name": "D1", "size": [%g, %g, %g], "position": [%g, %g, %g]}]},
     "instruments": {"diagnostics_rate_hz": 50}
   })",
-                -pad, -pad, -pad, L + pad, L + pad, z_floor + std::max(2 * depth, z_centre + size[2]) + pad, dx, end_time, bulk_modulus, psi, z_floor,
-                L, L, z_floor, L, L, z_floor + depth, rho_b, size[0], size[1], size[2], L / 2, L / 2, z_floor + z_centre);
+                -pad, -pad, -pad, L + pad, L + pad, z_floor + std::max(2 * depth, z_centre + size[2]) + pad, dx,
+                end_time, bulk_modulus, psi, z_floor, L, L, z_floor, L, L, z_floor + depth, rho_b, size[0], size[1],
+                size[2], L / 2, L / 2, z_floor + z_centre);
   return buf;
 }
 

@@ -76,7 +76,10 @@ TEST(Floating, DenseBoxSinksToTheFloor) {
 // volume V (the tank to `depth` less the box's part below it) for the draft.
 struct Grounded {
   BodyState state;
-  double V, A_t, A_b;
+  double V, A_t, A_b, z_floor;
+  double bottom() const { return state.position.z() - 0.03 - z_floor; }  // above the floor (H / 2 = 0.03 m)
+  // The draft from the water's volume (as in SettlesAtArchimedesDraftWithinOneCell).
+  double draft() const { return (V / A_t - bottom()) / (1 - A_b / A_t); }
 };
 Grounded run_grounded(double depth, double dx, double z_floor = 0.0) {
   const double L = 0.45, gap = 0.0005, H = 0.06, size[3] = {0.06, 0.15, H};
@@ -86,7 +89,7 @@ Grounded run_grounded(double depth, double dx, double z_floor = 0.0) {
   }
   EXPECT_EQ(sim->step(), RunStatus::kOk) << "depth " << depth << ", dx " << dx << ": " << sim->message();
   const double A_b = 0.06 * 0.15;
-  return {sim->debris()->world().state(0), L * L * depth - A_b * (depth - gap), L * L, A_b};
+  return {sim->debris()->world().state(0), L * L * depth - A_b * (depth - gap), L * L, A_b, z_floor};
 }
 
 // A container resting on the floor in water deeper than its draft floats up (the film under it carries the
@@ -99,8 +102,7 @@ TEST(Floating, GroundedContainerLiftsOffToArchimedesDraft) {
   const double H = 0.06, expected = 0.4185 * H;
   for (const double dx : {0.03, 0.02}) {
     const Grounded g = run_grounded(0.045, dx);
-    const double z_b = g.state.position.z() - H / 2;
-    const double draft = (g.V / g.A_t - z_b) / (1 - g.A_b / g.A_t);
+    const double z_b = g.bottom(), draft = g.draft();
     std::printf("dx %.2f: bottom %.4f m, draft %.4f m against %.4f m (%.2f cells), speed %.2g m/s\n", dx, z_b, draft,
                 expected, (draft - expected) / dx, g.state.velocity.norm());
     EXPECT_NEAR(draft, expected, dx) << "dx " << dx;
@@ -113,8 +115,8 @@ TEST(Floating, GroundedContainerLiftsOffToArchimedesDraft) {
     if (dx > 0.025) EXPECT_LT(g.state.velocity.norm(), 1e-2) << "dx " << dx;
   }
   const Grounded shallow = run_grounded(0.020, 0.03);
-  std::printf("2 cm of water: bottom %.5f m\n", shallow.state.position.z() - H / 2);
-  EXPECT_LT(shallow.state.position.z() - H / 2, 0.001);
+  std::printf("2 cm of water: bottom %.5f m\n", shallow.bottom());
+  EXPECT_LT(shallow.bottom(), 0.001);
 }
 
 // The same container on a floor raised off the grid's origin and between two of its lines, as the Waseda apron
@@ -128,13 +130,12 @@ TEST(Floating, GroundedContainerLiftsOffToArchimedesDraft) {
 TEST(Floating, ContainerOnARaisedFloorGroundsInASheetAndFloatsInDeepWater) {
   const double H = 0.06, dx = 0.02, z_floor = 0.255, expected = 0.4185 * H;
   const Grounded shallow = run_grounded(0.0125, dx, z_floor);
-  const double lift = shallow.state.position.z() - H / 2 - z_floor;
+  const double lift = shallow.bottom();
   std::printf("1.25 cm of water: bottom %.5f m above the floor, speed %.2g m/s\n", lift, shallow.state.velocity.norm());
   EXPECT_LT(lift, 0.001);
   EXPECT_LT(shallow.state.velocity.norm(), 1e-2);
   const Grounded deep = run_grounded(0.045, dx, z_floor);
-  const double z_b = deep.state.position.z() - H / 2 - z_floor;
-  const double draft = (deep.V / deep.A_t - z_b) / (1 - deep.A_b / deep.A_t);
+  const double z_b = deep.bottom(), draft = deep.draft();
   std::printf("4.5 cm of water: bottom %.4f m, draft %.4f m against %.4f m (%.2f cells)\n", z_b, draft, expected,
               (draft - expected) / dx);
   EXPECT_NEAR(draft, expected, dx);
