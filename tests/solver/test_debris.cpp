@@ -109,14 +109,11 @@ TEST(Floating, GroundedContainerLiftsOffToArchimedesDraft) {
                 expected, (draft - expected) / dx, g.state.velocity.norm());
     EXPECT_NEAR(draft, expected, dx) << "dx " << dx;
     EXPECT_GT(z_b, 0.005) << "dx " << dx << ": still on the floor";
-    // At rest there: checked at dx 0.03 m only. At dx 0.02 m, since the film reads the water's pressure with
-    // its hydrostatic part (commit 57e95e0; before, it read rho g z too high, up to 0.2 kPa in this tank), the
-    // container reaches the draft within 0.6 of a cell but still moves at 1.8 cm/s at 2 s and 1.1 cm/s at 3 s,
-    // within a cell of the floor where the film and the grid share its support: open (docs/debris.md, "Not
-    // done yet"), not a tolerance.
-    if (dx > 0.025) {
-      EXPECT_LT(g.state.velocity.norm(), 1e-2) << "dx " << dx;
-    }
+    // At rest there. With the coupling band's nodes culled at the box's bare half-diagonal (before the band was
+    // added to the bounding sphere), the film's rim lost its bins round the container's end faces and read
+    // part of the pressure; at dx 0.02 m the container then floated 0.63 cells too deep and still drifted at
+    // 1.8 cm/s at 2 s (0.43 cells and 5 mm/s with the whole band).
+    EXPECT_LT(g.state.velocity.norm(), 1e-2) << "dx " << dx;
   }
   const Grounded shallow = run_grounded(0.020, 0.03);
   std::printf("2 cm of water: bottom %.5f m\n", shallow.bottom());
@@ -144,6 +141,32 @@ TEST(Floating, ContainerOnARaisedFloorGroundsInASheetAndFloatsInDeepWater) {
               (draft - expected) / dx);
   EXPECT_NEAR(draft, expected, dx);
   EXPECT_GT(z_b, 0.005) << "still on the floor";
+}
+
+// The coupling band: every grid node up to one cell outside a box is one of its moving-wall nodes and feeds the
+// film's rim (debris_coupling.h), also round the ends of a long box, where such a node lies beyond the box's
+// half-diagonal (the Waseda container's 0.086 m; a node a cell off an end face at mid-height is 0.098 m from the
+// centre), and on both sides alike when the faces lie on grid lines, a whole cell from the next node (here the
+// x faces, at 0.20 and 0.26 m: the points 0.18 and 0.28 m, one of which round-off put outside the band).
+TEST(Coupling, BandReachesACellBeyondEveryFace) {
+  const double size[3] = {0.06, 0.15, 0.06}, dx = 0.02, L = 0.46;  // centre (0.23, 0.23): x faces on grid lines
+  const Scene scene = parse_scene_text(test::tank_scene(L, 0.045, size, 418.5, 0.03, dx, 0.1, 0.9, 2e6), "band");
+  DebrisCoupling coupling(scene);
+  const double c[3] = {L / 2, L / 2, 0.03};
+  double n[3];
+  for (const double s : {1.0, -1.0}) {
+    for (int axis = 0; axis < 3; ++axis) {
+      for (const double out : {0.5 * dx, dx}) {
+        double x[3] = {c[0], c[1], c[2]};
+        x[axis] += s * (0.5 * size[axis] + out);
+        EXPECT_EQ(coupling.locate(x, dx, n), 0) << "axis " << axis << ", side " << s << ", " << out / dx << " cells out";
+        EXPECT_NEAR(n[axis], s, 1e-12) << "axis " << axis << ", side " << s;
+      }
+      double far[3] = {c[0], c[1], c[2]};
+      far[axis] += s * (0.5 * size[axis] + 1.5 * dx);
+      EXPECT_EQ(coupling.locate(far, dx, n), -1) << "axis " << axis << ": 1.5 cells out is beyond the band";
+    }
+  }
 }
 
 // A Waseda container standing on a raised floor (0.255 m, as the apron; 0.5 mm up) in a uniform current: the
