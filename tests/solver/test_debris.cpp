@@ -76,10 +76,13 @@ TEST(Floating, DenseBoxSinksToTheFloor) {
 // A Waseda container (0.06 x 0.15 x 0.06 m, 418.5 kg/m^3) standing on the floor of a still tank, 0.5 mm up as
 // the Waseda layout places it, the water seeded round it to `depth`. Returns the final state and the water
 // volume V (the tank to `depth` less the box's part below it) for the draft.
+// A Waseda container's bottom above a floor at z_floor (its half height H / 2 = 0.03 m).
+double bottom_above(const BodyState& s, double z_floor) { return s.position.z() - 0.03 - z_floor; }
+
 struct Grounded {
   BodyState state;
   double V, A_t, A_b, z_floor;
-  double bottom() const { return state.position.z() - 0.03 - z_floor; }  // above the floor (H / 2 = 0.03 m)
+  double bottom() const { return bottom_above(state, z_floor); }
   // The draft from the water's volume (as in SettlesAtArchimedesDraftWithinOneCell).
   double draft() const { return (V / A_t - bottom()) / (1 - A_b / A_t); }
 };
@@ -176,7 +179,7 @@ TEST(Coupling, BandReachesACellBeyondEveryFace) {
 struct InCurrent {
   BodyState state;
   double lowest, highest;  // the bottom's height above the floor after 0.2 s, lowest and highest (m)
-  double bottom() const { return state.position.z() - 0.03 - 0.255; }
+  double bottom() const { return bottom_above(state, 0.255); }
 };
 InCurrent run_in_current(double depth, double U, double dx) {
   const double W = 0.45, x0 = 0.1, x1 = 2.6, xc = 1.3, z_floor = 0.255, pad = 3 * dx, gap = 0.0005, H = 0.06;
@@ -202,7 +205,7 @@ InCurrent run_in_current(double depth, double U, double dx) {
   r.highest = -1;
   while (sim->step() == RunStatus::kRunning)
     if (sim->time() > 0.2) {
-      const double b = sim->debris()->world().state(0).position.z() - H / 2 - z_floor;
+      const double b = bottom_above(sim->debris()->world().state(0), z_floor);
       r.lowest = std::min(r.lowest, b);
       r.highest = std::max(r.highest, b);
     }
