@@ -1,15 +1,15 @@
 #include "calibration/commands.h"
 
-#include <cerrno>
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "calibration/calibrate.h"
 #include "calibration/records.h"
 #include "calibration/spec.h"
+#include "common/command.h"
 #include "common/errors.h"
 #include "store/db/campaign_store.h"
 #include "store/h5/run_file.h"
@@ -17,55 +17,17 @@
 namespace flume::calibration {
 namespace {
 
-const char* kUsage =
-    "usage:\n"
-    "  flume calibrate SPEC.json --db FILE --out DIR [--workers N]\n"
-    "  flume calibrate target RESULT.h5 --out CSV [--gauge NAME ...] [--noise-m SIGMA] [--seed N] [--from "
-    "T0] "
-    "[--to T1]\n"
-    "  flume calibrate history --db FILE [--name NAME]\n";
-
-double parse_number(const std::string& flag, const std::string& text, double lo, double hi) {
-  errno = 0;
-  char* end = nullptr;
-  const double v = std::strtod(text.c_str(), &end);
-  if (text.empty() || *end || errno || !(v >= lo && v <= hi))
-    throw InputError(
-        "", flag,
-        "must be a number in [" + std::to_string(lo) + ", " + std::to_string(hi) + "] (got '" + text + "')");
-  return v;
-}
-
-int target_main(const std::vector<std::string>& args) {
+struct TargetArgs {
   std::string h5, out;
   std::vector<std::string> gauges;
   double noise = 0, from = 0, to = 1e30;
   std::uint64_t seed = 1;
-  for (size_t i = 0; i < args.size(); ++i) {
-    const std::string& a = args[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= args.size()) throw InputError("", a, "needs a value");
-      return args[++i];
-    };
-    if (a == "--out")
-      out = value();
-    else if (a == "--gauge")
-      gauges.push_back(value());
-    else if (a == "--noise-m")
-      noise = parse_number(a, value(), 0, 1);
-    else if (a == "--seed")
-      seed = static_cast<std::uint64_t>(parse_number(a, value(), 0, 4294967295.0));
-    else if (a == "--from")
-      from = parse_number(a, value(), 0, 1e6);
-    else if (a == "--to")
-      to = parse_number(a, value(), 0, 1e6);
-    else if (h5.empty() && a.rfind("--", 0) != 0)
-      h5 = a;
-    else
-      throw InputError("", a, std::string("unknown argument\n") + kUsage);
-  }
-  if (h5.empty() || out.empty())
-    throw InputError("", "", std::string("target needs RESULT.h5 and --out CSV\n") + kUsage);
+};
+
+int target_main(const TargetArgs& a) {
+  const std::string& h5 = a.h5;
+  const std::string& out = a.out;
+  std::vector<std::string> gauges = a.gauges;
   std::vector<SimRecord> records;
   try {
     if (gauges.empty()) gauges = h5::Reader(h5).list("/gauges");
@@ -74,23 +36,13 @@ int target_main(const std::vector<std::string>& args) {
     throw InputError(h5, "gauges", e.what());
   }
   if (gauges.empty()) throw InputError(h5, "/gauges", "has no gauge records");
-  const double rms = write_target_csv(out, gauges, records, noise, seed, from, to);
+  const double rms = write_target_csv(out, gauges, records, a.noise, a.seed, a.from, a.to);
   std::printf("wrote %s: %zu gauge(s), noise sigma %g m (seed %llu), noise RMS %.6g m\n", out.c_str(),
-              gauges.size(), noise, static_cast<unsigned long long>(seed), rms);
+              gauges.size(), a.noise, static_cast<unsigned long long>(a.seed), rms);
   return kExitOk;
 }
 
-int history_main(const std::vector<std::string>& args) {
-  std::string db_file, name;
-  for (size_t i = 0; i < args.size(); ++i) {
-    if (args[i] == "--db" && i + 1 < args.size())
-      db_file = args[++i];
-    else if (args[i] == "--name" && i + 1 < args.size())
-      name = args[++i];
-    else
-      throw InputError("", args[i], std::string("unknown argument\n") + kUsage);
-  }
-  if (db_file.empty()) throw InputError("", "--db", "is required");
+int history_main(const std::string& db_file, const std::string& name) {
   store::CampaignStore db(db_file, true);
   std::printf("calibration,phase,start,seq,run,objective,params\n");
   for (const auto& c : db.campaigns()) {
@@ -107,31 +59,10 @@ int history_main(const std::vector<std::string>& args) {
   return kExitOk;
 }
 
-int calibrate(const std::vector<std::string>& args) {
-  std::string spec_file;
-  CalibrateOptions options;
-  for (size_t i = 0; i < args.size(); ++i) {
-    const std::string& a = args[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= args.size()) throw InputError("", a, "needs a value");
-      return args[++i];
-    };
-    if (a == "--db")
-      options.db_file = value();
-    else if (a == "--out")
-      options.out_dir = value();
-    else if (a == "--workers")
-      options.workers = static_cast<int>(parse_number(a, value(), 1, 1024));
-    else if (spec_file.empty() && a.rfind("--", 0) != 0)
-      spec_file = a;
-    else
-      throw InputError("", a, std::string("unknown argument\n") + kUsage);
-  }
-  if (spec_file.empty()) throw InputError("", "", std::string("SPEC.json is required\n") + kUsage);
-  if (options.db_file.empty())
-    throw InputError("", "--db", "is required (the campaign store to keep the runs in)");
-  if (options.out_dir.empty())
-    throw InputError("", "--out", "is required (where calibration.json and the plots go)");
+int calibrate(const std::string& spec_file, const CalibrateOptions& options) {
+  if (spec_file.empty()) throw cli::UsageError("SPEC", "is required (the calibration spec, docs/calibration.md)");
+  if (options.db_file.empty()) throw cli::UsageError("--db", "is required (the campaign store to keep the runs in)");
+  if (options.out_dir.empty()) throw cli::UsageError("--out", "is required (where calibration.json and the plots go)");
   const CalibrationSpec spec = load_calibration_spec(spec_file);
   CalibrationResult result;
   const int code = run_calibration(spec, options, result);
@@ -151,26 +82,36 @@ int calibrate(const std::vector<std::string>& args) {
 
 }  // namespace
 
-int calibrate_main(int argc, char** argv) {
-  std::vector<std::string> args(argv + 1, argv + argc);
-  try {
-    if (args.empty() || args[0] == "--help" || args[0] == "-h") {
-      std::fputs(kUsage, args.empty() ? stderr : stdout);
-      return args.empty() ? kExitInvalidInput : kExitOk;
-    }
-    if (args[0] == "target") return target_main({args.begin() + 1, args.end()});
-    if (args[0] == "history") return history_main({args.begin() + 1, args.end()});
-    return calibrate(args);
-  } catch (const InputError& e) {
-    std::fprintf(stderr, "flume calibrate: %s\n", e.what());
-    return kExitInvalidInput;
-  } catch (const store::StoreError& e) {
-    std::fprintf(stderr, "flume calibrate: store: %s\n", e.what());
-    return kExitInternal;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "flume calibrate: %s\n", e.what());
-    return kExitInternal;
-  }
+void add_calibrate_command(CLI::App& app) {
+  // SPEC, --db and --out are checked by calibrate(): `target` and `history` don't take them.
+  struct Args {
+    std::string spec;
+    CalibrateOptions options;
+    TargetArgs target;
+    std::string history_db, history_name;
+  };
+  auto a = std::make_shared<Args>();
+  app.add_option("SPEC", a->spec, "the calibration spec (docs/calibration.md)");
+  app.add_option("--db", a->options.db_file, "the campaign store the runs are kept in (required)");
+  app.add_option("--out", a->options.out_dir, "where calibration.json and the plots go (required)");
+  app.add_option("--workers", a->options.workers, "runs at a time")->check(CLI::Range(1, 1024));
+  cli::on_parse(app, [a] { return calibrate(a->spec, a->options); });
+
+  CLI::App* target = app.add_subcommand("target", "a run's gauge records as a target CSV, with optional noise");
+  target->add_option("RESULT", a->target.h5, "the run's result.h5")->required();
+  target->add_option("--out", a->target.out, "the CSV to write")->required();
+  target->add_option("--gauge", a->target.gauges, "a gauge to take (repeatable; default: every one)")
+      ->allow_extra_args(false);
+  target->add_option("--noise-m", a->target.noise, "Gaussian noise sigma (m)")->check(CLI::Range(0.0, 1.0));
+  target->add_option("--seed", a->target.seed, "the noise's seed")->check(CLI::Range(0.0, 4294967295.0));
+  target->add_option("--from", a->target.from, "first time kept (s)")->check(CLI::Range(0.0, 1e6));
+  target->add_option("--to", a->target.to, "last time kept (s)")->check(CLI::Range(0.0, 1e6));
+  cli::on_parse(*target, [a] { return target_main(a->target); });
+
+  CLI::App* history = app.add_subcommand("history", "the evaluations in the store, as CSV on stdout");
+  history->add_option("--db", a->history_db, "the campaign store")->required();
+  history->add_option("--name", a->history_name, "only the calibration of this name");
+  cli::on_parse(*history, [a] { return history_main(a->history_db, a->history_name); });
 }
 
 }  // namespace flume::calibration

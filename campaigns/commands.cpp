@@ -1,11 +1,11 @@
-// `flume campaign run|status|export` and `flume model`: argument parsing and reporting only.
+// `flume campaign run|status|export` and `flume model`: their options and reporting.
 #include "campaigns/commands.h"
 
 #include <unistd.h>
 
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
+#include <memory>
 #include <fstream>
 #include <iostream>
 #include <optional>
@@ -14,6 +14,8 @@
 #include "campaigns/engine.h"
 #include "campaigns/models.h"
 #include "campaigns/spec.h"
+#include "common/command.h"
+#include "common/duration.h"
 #include "common/errors.h"
 #include "store/db/campaign_store.h"
 
@@ -24,48 +26,10 @@
 namespace flume {
 namespace {
 
-const char* kUsage =
-    "usage:\n"
-    "  flume campaign run SPEC.json --db FILE [--workers N]   run or resume a campaign\n"
-    "  mpirun -np K flume campaign run SPEC.json --db FILE    rank 0 hands out runs to ranks 1..K-1\n"
-    "  flume campaign status --db FILE [--campaign NAME]      counts, failures, throughput, time left\n"
-    "  flume campaign export --db FILE --csv OUT [--campaign NAME]   one row per run ('-': stdout)\n";
-
 struct Args {
-  std::vector<std::string> positional;
-  std::string db, csv, campaign;
+  std::string spec, db, csv, campaign;
   int workers = -1;
 };
-
-Args parse_args(int argc, char** argv, int first) {
-  Args a;
-  for (int i = first; i < argc; ++i) {
-    const std::string s = argv[i];
-    auto value = [&](const char* name) -> std::string {
-      if (i + 1 >= argc) throw InputError("command line", name, "needs a value");
-      return argv[++i];
-    };
-    if (s == "--db") {
-      a.db = value("--db");
-    } else if (s == "--csv") {
-      a.csv = value("--csv");
-    } else if (s == "--campaign") {
-      a.campaign = value("--campaign");
-    } else if (s == "--workers") {
-      const std::string v = value("--workers");
-      char* end = nullptr;
-      const long n = std::strtol(v.c_str(), &end, 10);
-      if (*end || n < 0 || n > 4096) throw InputError("command line", "--workers", "must be an integer in [0, 4096] (got '" + v + "')");
-      a.workers = static_cast<int>(n);
-    } else if (!s.empty() && s[0] == '-') {
-      throw InputError("command line", s, "unknown option");
-    } else {
-      a.positional.push_back(s);
-    }
-  }
-  if (a.db.empty()) throw InputError("command line", "--db", "is required (the campaign database file)");
-  return a;
-}
 
 // Launched by mpirun/srun: the launcher's variables are present.
 bool under_mpi_launcher() {
@@ -95,36 +59,24 @@ int run_command_main(const Args& args) {
   }
 #endif
   try {
-    if (args.positional.size() != 1) throw InputError("command line", "SPEC", "expected exactly one campaign spec file");
-    const campaigns::CampaignSpec spec = campaigns::load_campaign_spec(args.positional[0]);
+    const campaigns::CampaignSpec spec = campaigns::load_campaign_spec(args.spec);
     campaigns::EngineOptions opt;
     opt.db_file = args.db;
     // Under MPI the other ranks are the workers; rank 0 runs none itself unless asked.
     opt.local_workers = args.workers >= 0 ? args.workers : (size > 1 ? 0 : 1);
-    if (size <= 1 && opt.local_workers == 0) throw InputError("command line", "--workers", "must be at least 1 without MPI");
+    if (size <= 1 && opt.local_workers == 0) throw cli::UsageError("--workers", "must be at least 1 without MPI");
     opt.terminal = isatty(STDERR_FILENO);
     return campaigns::run_campaign(spec, opt, size);
-  } catch (const InputError& e) {
-    std::fprintf(stderr, "%s\n", e.what());
-#ifdef FLUME_HAVE_MPI
-    if (size > 1) campaigns::stop_workers(size);
-#endif
-    return kExitInvalidInput;
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "flume campaign: %s\n", e.what());
+    // Rank 0's error is reported by the command line (cli/app.cpp); the workers are stopped first.
 #ifdef FLUME_HAVE_MPI
-    if (size > 1) MPI_Abort(MPI_COMM_WORLD, kExitInternal);
+    if (size > 1) {
+      if (dynamic_cast<const InputError*>(&e) || dynamic_cast<const cli::UsageError*>(&e)) campaigns::stop_workers(size);
+      else MPI_Abort(MPI_COMM_WORLD, kExitInternal);
+    }
 #endif
-    return kExitInternal;
+    throw;
   }
-}
-
-std::string hms(double s) {
-  if (!(s >= 0) || s > 1e9) return "unknown";
-  const long t = static_cast<long>(s + 0.5);
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%ld:%02ld:%02ld", t / 3600, (t / 60) % 60, t % 60);
-  return buf;
 }
 
 int status_main(const Args& args) {
@@ -166,7 +118,6 @@ int status_main(const Args& args) {
 }
 
 int export_main(const Args& args) {
-  if (args.csv.empty()) throw InputError("command line", "--csv", "is required (an output file, or - for stdout)");
   store::CampaignStore db(args.db, true);
   std::optional<std::int64_t> campaign;
   if (!args.campaign.empty()) {
@@ -190,28 +141,58 @@ int export_main(const Args& args) {
 
 }  // namespace
 
-int campaign_main(int argc, char** argv) {
-  if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h")) {
-    std::fputs(kUsage, argc < 2 ? stderr : stdout);
-    return argc < 2 ? kExitInvalidInput : kExitOk;
-  }
-  const std::string sub = argv[1];
-  try {
-    const Args args = parse_args(argc, argv, 2);
-    if (sub == "run") return run_command_main(args);
-    if (sub == "status") return status_main(args);
-    if (sub == "export") return export_main(args);
-    std::fprintf(stderr, "flume campaign: unknown subcommand '%s'\n%s", sub.c_str(), kUsage);
-    return kExitInvalidInput;
-  } catch (const InputError& e) {
-    std::fprintf(stderr, "%s\n", e.what());
-    return kExitInvalidInput;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "flume campaign %s: %s\n", sub.c_str(), e.what());
-    return kExitInternal;
-  }
+void add_campaign_command(CLI::App& app) {
+  auto a = std::make_shared<Args>();
+  auto db = [&](CLI::App* sub) {
+    sub->add_option("--db", a->db, "the campaign database (SQLite; docs/results.md)")->required();
+  };
+  auto name = [&](CLI::App* sub) {
+    sub->add_option("--campaign", a->campaign, "only the campaign of this name (default: every one)");
+  };
+
+  CLI::App* run = app.add_subcommand("run", "run or resume a campaign (under mpirun -np K: rank 0 hands out runs to ranks 1..K-1)");
+  run->add_option("SPEC", a->spec, "the campaign spec (docs/campaigns.md)")->required();
+  db(run);
+  run->add_option("--workers", a->workers, "runs at a time on this machine (default 1; 0 under MPI)")
+      ->check(CLI::Range(0, 4096));
+  cli::on_parse(*run, [a] { return run_command_main(*a); });
+
+  CLI::App* status = app.add_subcommand("status", "counts, failures, throughput, time left");
+  db(status);
+  name(status);
+  cli::on_parse(*status, [a] { return status_main(*a); });
+
+  CLI::App* exp = app.add_subcommand("export", "one CSV row per run: parameters, status, metrics");
+  db(exp);
+  exp->add_option("--csv", a->csv, "the CSV file to write ('-': stdout)")->required();
+  name(exp);
+  cli::on_parse(*exp, [a] { return export_main(*a); });
 }
 
-int model_main(int argc, char** argv) { return campaigns::model_main(argc, argv); }
+void add_model_command(CLI::App& app) {
+  struct ModelArgs {
+    std::string model, out;
+    std::vector<std::string> sets;
+    int threads = 1;
+  };
+  auto a = std::make_shared<ModelArgs>();
+  std::string names;
+  for (const auto& n : campaigns::model_names()) names += (names.empty() ? "" : "|") + n;
+  app.add_option("MODEL", a->model, names)->required();
+  app.add_option("--out", a->out, "the run's folder (run.json)")->required();
+  cli::add_set_option(app, a->sets, "a model input, e.g. --set x1=0.5 (repeatable)");
+  app.add_option("--threads", a->threads, "accepted for symmetry with `flume run`; the models are serial");
+  cli::on_parse(app, [a] {
+    std::vector<std::pair<std::string, std::string>> sets;
+    for (const auto& s : a->sets) {
+      const auto eq = s.find('=');
+      if (eq == std::string::npos || eq == 0) throw cli::UsageError("--set", s + ": expected name=value");
+      sets.emplace_back(s.substr(0, eq), s.substr(eq + 1));
+    }
+    const std::string problem = campaigns::check_model_inputs(a->model, sets);
+    if (!problem.empty()) throw cli::UsageError("--set", problem);
+    return campaigns::run_model(a->model, a->out, sets);
+  });
+}
 
 }  // namespace flume

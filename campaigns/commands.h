@@ -1,9 +1,12 @@
-// Entry points of `flume campaign ...` and `flume model ...`.
+// `flume campaign run|status|export` and `flume model` on the command line (common/command.h).
 #pragma once
 
+namespace CLI {
+class App;
+}
+
 namespace flume {
-// flume campaign run SPEC --db FILE [--workers N] | status --db FILE | export --db FILE --csv OUT
-int campaign_main(int argc, char** argv);
-// flume model ishigami|test --out DIR [--set name=value ...]
-int model_main(int argc, char** argv);
+void add_campaign_command(CLI::App& app);
+// analytic stand-ins for `flume run` (campaigns/models.cpp)
+void add_model_command(CLI::App& app);
 }  // namespace flume

@@ -17,6 +17,7 @@
 #include <thread>
 
 #include "campaigns/process.h"
+#include "common/duration.h"
 #include "common/errors.h"
 #include "flume_version.h"
 
@@ -53,17 +54,6 @@ class WriterLock {
  private:
   int fd_ = -1;
 };
-
-std::string hms(double s) {
-  if (!(s >= 0) || s > 1e8) return "--:--";
-  const long t = static_cast<long>(s + 0.5);
-  char buf[32];
-  if (t >= 3600)
-    std::snprintf(buf, sizeof buf, "%ld:%02ld:%02ld", t / 3600, (t / 60) % 60, t % 60);
-  else
-    std::snprintf(buf, sizeof buf, "%ld:%02ld", t / 60, t % 60);
-  return buf;
-}
 
 // Progress: a line rewritten in place on a terminal, one plain line per finished run otherwise (logs).
 class Progress {

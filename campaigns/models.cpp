@@ -181,43 +181,8 @@ std::string check_model_inputs(const std::string& model,
   return "";
 }
 
-int model_main(int argc, char** argv) {
-  const char* usage = "usage: flume model ishigami|test|debris --out DIR [--set name=value ...]\n";
-  if (argc < 2) {
-    std::fputs(usage, stderr);
-    return kExitInvalidInput;
-  }
-  const std::string model = argv[1];
-  std::string out_dir;
-  std::vector<std::pair<std::string, std::string>> sets;
-  for (int i = 2; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "--out" && i + 1 < argc) {
-      out_dir = argv[++i];
-    } else if (a == "--set" && i + 1 < argc) {
-      const std::string s = argv[++i];
-      const auto eq = s.find('=');
-      if (eq == std::string::npos || eq == 0) {
-        std::fprintf(stderr, "--set: %s: expected name=value\n", s.c_str());
-        return kExitInvalidInput;
-      }
-      sets.emplace_back(s.substr(0, eq), s.substr(eq + 1));
-    } else if (a == "--threads" && i + 1 < argc) {
-      ++i;  // accepted for symmetry with `flume run`; the models are serial
-    } else {
-      std::fprintf(stderr, "flume model: unknown argument '%s'\n%s", a.c_str(), usage);
-      return kExitInvalidInput;
-    }
-  }
-  if (out_dir.empty()) {
-    std::fprintf(stderr, "flume model: --out DIR is required\n");
-    return kExitInvalidInput;
-  }
-  const std::string problem = check_model_inputs(model, sets);
-  if (!problem.empty()) {
-    std::fprintf(stderr, "--set: %s\n", problem.c_str());
-    return kExitInvalidInput;
-  }
+int run_model(const std::string& model, const std::string& out_dir,
+              const std::vector<std::pair<std::string, std::string>>& sets) {
   std::error_code ec;
   std::filesystem::create_directories(out_dir, ec);
   ModelInput in;

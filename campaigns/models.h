@@ -28,7 +28,9 @@ std::vector<std::string> model_names();
 std::string check_model_inputs(const std::string& model,
                                const std::vector<std::pair<std::string, std::string>>& inputs);
 
-// `flume model NAME --out DIR [--set name=value ...]`.
-int model_main(int argc, char** argv);
+// `flume model NAME --out DIR [--set name=value ...]`: runs the model on inputs check_model_inputs() accepted,
+// writes DIR/run.json and returns the exit code `flume run` would.
+int run_model(const std::string& model, const std::string& out_dir,
+              const std::vector<std::pair<std::string, std::string>>& sets);
 
 }  // namespace flume::campaigns

@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "common/command.h"
 #include "common/errors.h"
 #include "common/plot/figure.h"
 #include "solver/run_output.h"
@@ -26,7 +27,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr const char* kCli = "flume gauges";
 constexpr double kArrivalThresholdM = 0.005;  // 5 mm, as `flume run` has it for run.json's arrival_s
 
 struct Record {
@@ -54,8 +54,8 @@ std::pair<std::string, std::string> parse_run_arg(const std::string& a) {
   if (eq != std::string::npos && !fs::exists(a)) {
     dir = a.substr(0, eq);
     label = a.substr(eq + 1);
-    if (dir.empty()) throw InputError(kCli, a, "RUN_DIR=LABEL needs a run folder before '='");
-    if (label.empty()) throw InputError(kCli, a, "RUN_DIR=LABEL needs a label after '='");
+    if (dir.empty()) throw cli::UsageError(a, "RUN_DIR=LABEL needs a run folder before '='");
+    if (label.empty()) throw cli::UsageError(a, "RUN_DIR=LABEL needs a label after '='");
   }
   if (label.empty()) {
     fs::path p = fs::absolute(fs::path(dir)).lexically_normal();
@@ -72,7 +72,7 @@ std::vector<std::string> parse_gauge_list(const std::string& option, const std::
   while (true) {
     const std::size_t comma = value.find(',', start);
     const std::string name = value.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
-    if (name.empty()) throw InputError(kCli, option, "'" + value + "': a comma-separated list of gauge names, none empty");
+    if (name.empty()) throw cli::UsageError(option, "'" + value + "': a comma-separated list of gauge names, none empty");
     if (std::find(names.begin(), names.end(), name) == names.end()) names.push_back(name);
     if (comma == std::string::npos) break;
     start = comma + 1;
@@ -84,7 +84,7 @@ double parse_positive(const std::string& option, const std::string& value) {
   char* end = nullptr;
   const double v = std::strtod(value.c_str(), &end);
   if (value.empty() || end != value.c_str() + value.size() || !std::isfinite(v) || v <= 0)
-    throw InputError(kCli, option, "'" + value + "': a positive number of seconds");
+    throw cli::UsageError(option, "'" + value + "': a positive number of seconds");
   return v;
 }
 
@@ -205,45 +205,29 @@ void sort_gauge_names(std::vector<std::string>& names) {
   std::sort(names.begin(), names.end(), natural_less);
 }
 
-int gauges_main(int argc, char** argv) {
-  const char* usage =
-      "usage: flume gauges RUN_DIR[=LABEL] [RUN_DIR[=LABEL] ...] --out FILE.svg [--gauges WG1,WG2,...]\n"
-      "                    [--t-max S] [--title TEXT]\n"
-      "  one panel per gauge (default: every gauge of the first run), one line per run (LABEL: default the\n"
-      "  folder's name); prints per gauge and run the peak, its time and the arrival (the first time the record\n"
-      "  rises 5 mm above its first reading), over t <= --t-max when given\n";
-  return guarded_main(kCli, usage, [&]() -> int {
+void add_gauges_command(CLI::App& app) {
+  struct Args {
+    std::vector<std::string> runs;
+    std::string out, title, gauges, t_max;
+  };
+  auto a = std::make_shared<Args>();
+  app.footer(
+      "One panel per gauge (default: every gauge of the first run), one line per run (LABEL: default the folder's\n"
+      "name); prints per gauge and run the peak, its time and the arrival (the first time the record rises 5 mm\n"
+      "above its first reading), over t <= --t-max when given.");
+  app.add_option("RUN_DIR", a->runs, "a finished run's folder, optionally =LABEL")->required()->type_name("RUN_DIR[=LABEL]");
+  app.add_option("--out", a->out, "the .svg file to write")->required();
+  app.add_option("--gauges", a->gauges, "the gauges to show, e.g. WG1,WG2")->type_name("WG1,WG2,...");
+  app.add_option("--t-max", a->t_max, "the last time shown and summarised (s)")->type_name("S");
+  app.add_option("--title", a->title, "the figure's title");
+  cli::on_parse(app, [a]() -> int {
     std::vector<std::pair<std::string, std::string>> run_args;  // dir, label
-    std::string out, title;
-    std::vector<std::string> wanted;
-    bool have_wanted = false;
-    double t_max = std::numeric_limits<double>::infinity();
-    for (int i = 1; i < argc; ++i) {
-      const std::string a = argv[i];
-      auto value = [&]() -> std::string {
-        if (i + 1 >= argc) throw InputError(kCli, a, "needs a value");
-        return argv[++i];
-      };
-      if (a == "--help" || a == "-h") {
-        std::fputs(usage, stdout);
-        return kExitOk;
-      } else if (a == "--out") {
-        out = value();
-      } else if (a == "--gauges") {
-        wanted = parse_gauge_list(a, value());
-        have_wanted = true;
-      } else if (a == "--t-max") {
-        t_max = parse_positive(a, value());
-      } else if (a == "--title") {
-        title = value();
-      } else if (a.rfind("--", 0) == 0 || (a.size() > 1 && a[0] == '-')) {
-        throw InputError(kCli, a, "unknown option (allowed: --out, --gauges, --t-max, --title, --help)");
-      } else {
-        run_args.push_back(parse_run_arg(a));
-      }
-    }
-    if (run_args.empty()) throw InputError(kCli, "RUN_DIR", "at least one run folder is required");
-    if (out.empty()) throw InputError(kCli, "--out", "is required (an .svg file)");
+    for (const auto& r : a->runs) run_args.push_back(parse_run_arg(r));
+    const std::string& out = a->out;
+    const std::string& title = a->title;
+    const bool have_wanted = !a->gauges.empty();
+    std::vector<std::string> wanted = have_wanted ? parse_gauge_list("--gauges", a->gauges) : std::vector<std::string>{};
+    const double t_max = a->t_max.empty() ? std::numeric_limits<double>::infinity() : parse_positive("--t-max", a->t_max);
 
     std::vector<Run> runs;
     for (const auto& [dir, label] : run_args) runs.push_back(open_run(dir, label));

@@ -4,9 +4,13 @@
 #include <string>
 #include <vector>
 
+namespace CLI {
+class App;
+}
+
 namespace flume::report {
 
-int gauges_main(int argc, char** argv);
+void add_gauges_command(CLI::App& app);
 
 // Gauge names in natural order: WG2 before WG10 (the result file keeps no creation order).
 void sort_gauge_names(std::vector<std::string>& names);

@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "common/command.h"
 #include "common/errors.h"
 #include "common/plot/figure.h"
 #include "report/debris.h"
@@ -27,7 +28,6 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-constexpr const char* kCli = "flume debris-paths";
 
 struct DebrisPath {
   std::string name;
@@ -99,7 +99,7 @@ RunPaths read_run(const std::string& dir, const std::vector<Override>& sets) {
                            "') is not there: run it again with this flume, which records the scene");
     scene = json::parse(scene_json_with_overrides(file, sets));
   } else if (!sets.empty()) {
-    throw InputError(kCli, "--set", "only for runs whose run.json has no scene_json; " + run_json + " has one");
+    throw cli::UsageError("--set", "only for runs whose run.json has no scene_json; " + run_json + " has one");
   }
   r.scene_name = scene.value("name", fs::path(dir).filename().string());
   r.layout = scene_value<std::string>(scene, "obstacles.layout", "0x0");
@@ -231,38 +231,35 @@ void print_run(const RunPaths& r) {
 
 }  // namespace
 
-int debris_paths_main(int argc, char** argv) {
-  const char* usage =
-      "usage: flume debris-paths RUN_DIR [--set path=value ...] [RUN_DIR [--set ...] ...] --out FILE.svg\n"
-      "  --set (after a RUN_DIR, for that run): for runs older than run.json's scene_json, the overrides the run\n"
-      "  was started with\n";
-  return guarded_main(kCli, usage, [&]() -> int {
-    std::vector<std::string> dirs;
+void add_debris_paths_command(CLI::App& app) {
+  struct Args {
+    std::vector<std::string> dirs, sets;
     std::string out;
-    std::vector<std::vector<Override>> sets;  // per run folder
-    for (int i = 1; i < argc; ++i) {
-      const std::string a = argv[i];
-      if (a == "--help" || a == "-h") {
-        std::fputs(usage, stdout);
-        return kExitOk;
-      } else if (a == "--out") {
-        if (i + 1 >= argc) throw InputError(kCli, a, "needs a value");
-        out = argv[++i];
-      } else if (a == "--set") {
-        if (i + 1 >= argc) throw InputError(kCli, a, "needs path=value");
-        if (dirs.empty()) throw InputError(kCli, a, "belongs after the RUN_DIR it applies to");
-        sets.back().push_back(parse_override(argv[++i]));
-      } else if (a.rfind("--", 0) == 0) {
-        throw InputError(kCli, a, "unknown option");
-      } else {
-        dirs.push_back(a);
-        sets.emplace_back();
+  };
+  auto a = std::make_shared<Args>();
+  CLI::Option* dirs = app.add_option("RUN_DIR", a->dirs, "a finished run's folder")->required();
+  CLI::Option* sets = cli::add_set_option(
+      app, a->sets,
+      "after a RUN_DIR, for that run: for runs older than run.json's scene_json, the overrides the run was started "
+      "with");
+  app.add_option("--out", a->out, "the .svg file to write")->required();
+  const CLI::App* self = &app;
+  cli::on_parse(app, [a, self, dirs, sets]() -> int {
+    // Each --set belongs to the RUN_DIR before it: the order of the line decides.
+    std::vector<std::vector<Override>> run_sets;
+    std::size_t next_set = 0;
+    for (const CLI::Option* o : self->parse_order()) {
+      if (o == dirs) {
+        run_sets.emplace_back();
+      } else if (o == sets) {
+        if (run_sets.empty()) throw cli::UsageError("--set", "belongs after the RUN_DIR it applies to");
+        run_sets.back().push_back(parse_override(a->sets.at(next_set++)));
       }
     }
-    if (dirs.empty()) throw InputError(kCli, "RUN_DIR", "at least one run folder is required");
-    if (out.empty()) throw InputError(kCli, "--out", "is required (an .svg file)");
+    const std::vector<std::string>& dirs_in_order = a->dirs;
+    const std::string& out = a->out;
     std::vector<RunPaths> runs;
-    for (std::size_t k = 0; k < dirs.size(); ++k) runs.push_back(read_run(dirs[k], sets[k]));
+    for (std::size_t k = 0; k < dirs_in_order.size(); ++k) runs.push_back(read_run(dirs_in_order[k], run_sets.at(k)));
     plot::Figure fig(static_cast<int>(runs.size()), 1, 1000, 520 * static_cast<int>(runs.size()));
     for (std::size_t k = 0; k < runs.size(); ++k) {
       draw_run(fig.axes(static_cast<int>(k), 0), runs[k]);

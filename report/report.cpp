@@ -11,6 +11,7 @@
 #include <set>
 #include <sstream>
 
+#include "common/command.h"
 #include "common/errors.h"
 
 namespace flume::report {
@@ -398,7 +399,7 @@ std::pair<std::string, std::vector<double>> parse_metric_values(const std::strin
                                                                 const std::string& option) {
   const auto eq = text.rfind('=');
   if (eq == std::string::npos || eq == 0 || eq + 1 == text.size())
-    throw InputError(kCli, option, "expected metric=value[,value...] (got '" + text + "')");
+    throw cli::UsageError(option, "expected metric=value[,value...] (got '" + text + "')");
   std::vector<double> values;
   std::stringstream ss(text.substr(eq + 1));
   std::string item;
@@ -406,7 +407,7 @@ std::pair<std::string, std::vector<double>> parse_metric_values(const std::strin
     char* end = nullptr;
     const double v = std::strtod(item.c_str(), &end);
     if (item.empty() || *end != '\0' || !std::isfinite(v))
-      throw InputError(kCli, option, "'" + item + "' in '" + text + "' is not a finite number");
+      throw cli::UsageError(option, "'" + item + "' in '" + text + "' is not a finite number");
     values.push_back(v);
   }
   return {text.substr(0, eq), values};
@@ -418,79 +419,60 @@ double parse_number(const std::string& text, const std::string& option, double l
   if (text.empty() || *end != '\0' || !std::isfinite(v) || (lo_open ? !(v > lo) : !(v >= lo)) || !(v <= hi)) {
     char range[96];
     std::snprintf(range, sizeof range, "%s%g, %g]", lo_open ? "(" : "[", lo, hi);
-    throw InputError(kCli, option, "must be a number in " + std::string(range) + " (got '" + text + "')");
+    throw cli::UsageError(option, "must be a number in " + std::string(range) + " (got '" + text + "')");
   }
   return v;
 }
 
 }  // namespace
 
-int report_main(int argc, char** argv) {
-  const char* usage =
-      "usage: flume report --db FILE [--campaign NAME] --out DIR [--thresholds metric=v1,v2 ...]\n"
-      "                    [--ci-width metric=w ...] [--confidence 0.95] [--bootstrap 1000] [--cell 0.25]\n"
-      "                    [--map-runs 1000] [--seed 1]\n";
-  ReportOptions o;
-  try {
-    for (int i = 1; i < argc; ++i) {
-      const std::string a = argv[i];
-      auto value = [&]() -> std::string {
-        if (i + 1 >= argc) throw InputError(kCli, a, "needs a value");
-        return argv[++i];
-      };
-      if (a == "--help" || a == "-h") {
-        std::fputs(usage, stdout);
-        return kExitOk;
-      } else if (a == "--db") {
-        o.db_file = value();
-      } else if (a == "--campaign") {
-        o.campaign = value();
-      } else if (a == "--out") {
-        o.out_dir = value();
-      } else if (a == "--thresholds") {
-        // Several metric=values may follow one --thresholds, until the next option.
-        bool any = false;
-        while (i + 1 < argc && std::string(argv[i + 1]).rfind("--", 0) != 0) {
-          auto [metric, values] = parse_metric_values(argv[++i], "--thresholds");
-          auto& t = o.thresholds[metric];
-          t.insert(t.end(), values.begin(), values.end());
-          any = true;
-        }
-        if (!any) throw InputError(kCli, "--thresholds", "needs metric=value[,value...]");
-      } else if (a == "--ci-width") {
-        auto [metric, values] = parse_metric_values(value(), "--ci-width");
-        if (values.size() != 1 || !(values[0] > 0))
-          throw InputError(kCli, "--ci-width", "expected metric=w with one width w > 0");
-        o.ci_widths[metric] = values[0];
-      } else if (a == "--confidence") {
-        o.stats.confidence = parse_number(value(), a, 0.5, 0.999, false);
-      } else if (a == "--bootstrap") {
-        o.stats.bootstrap = static_cast<std::size_t>(parse_number(value(), a, 100, 100000, false));
-      } else if (a == "--cell") {
-        o.cell_m = parse_number(value(), a, 0.01, 2.0, false);
-      } else if (a == "--map-runs") {
-        o.map_runs = static_cast<std::size_t>(parse_number(value(), a, 1, 1e6, false));
-      } else if (a == "--seed") {
-        o.stats.seed = static_cast<std::uint64_t>(parse_number(value(), a, 0, 4294967295.0, false));
-      } else {
-        throw InputError(kCli, a, "unknown option");
-      }
+void add_report_command(CLI::App& app) {
+  struct Args {
+    ReportOptions o;
+    std::vector<std::string> thresholds, ci_widths;
+    std::string confidence, bootstrap, cell, map_runs, seed;
+  };
+  auto a = std::make_shared<Args>();
+  app.add_option("--db", a->o.db_file, "the campaign database")->required();
+  app.add_option("--campaign", a->o.campaign, "the campaign (default: the only one)");
+  app.add_option("--out", a->o.out_dir, "the folder report.html, report.json and the CSVs go to")->required();
+  app.add_option("--thresholds", a->thresholds, "exceedance thresholds, several may follow one flag")
+      ->type_name("METRIC=V1,V2");
+  app.add_option("--ci-width", a->ci_widths, "the confidence-interval width wanted for a metric (repeatable)")
+      ->allow_extra_args(false)
+      ->type_name("METRIC=W");
+  app.add_option("--confidence", a->confidence, "confidence level of the intervals, in [0.5, 0.999] (default 0.95)");
+  app.add_option("--bootstrap", a->bootstrap, "bootstrap resamples, in [100, 100000] (default 1000)");
+  app.add_option("--cell", a->cell, "map cell size (m), in [0.01, 2] (default 0.25)");
+  app.add_option("--map-runs", a->map_runs, "runs drawn on the map, in [1, 1e6] (default 1000)");
+  app.add_option("--seed", a->seed, "the bootstrap's seed (default 1)");
+  cli::on_parse(app, [a]() -> int {
+    ReportOptions o = a->o;
+    for (const auto& text : a->thresholds) {
+      auto [metric, values] = parse_metric_values(text, "--thresholds");
+      auto& t = o.thresholds[metric];
+      t.insert(t.end(), values.begin(), values.end());
     }
-    if (o.db_file.empty()) throw InputError(kCli, "--db", "is required (the campaign database)");
-    if (o.out_dir.empty())
-      throw InputError(kCli, "--out", "is required (the folder the report is written to)");
+    for (const auto& text : a->ci_widths) {
+      auto [metric, values] = parse_metric_values(text, "--ci-width");
+      if (values.size() != 1 || !(values[0] > 0))
+        throw cli::UsageError("--ci-width", "expected metric=w with one width w > 0");
+      o.ci_widths[metric] = values[0];
+    }
+    if (!a->confidence.empty()) o.stats.confidence = parse_number(a->confidence, "--confidence", 0.5, 0.999, false);
+    if (!a->bootstrap.empty())
+      o.stats.bootstrap = static_cast<std::size_t>(parse_number(a->bootstrap, "--bootstrap", 100, 100000, false));
+    if (!a->cell.empty()) o.cell_m = parse_number(a->cell, "--cell", 0.01, 2.0, false);
+    if (!a->map_runs.empty())
+      o.map_runs = static_cast<std::size_t>(parse_number(a->map_runs, "--map-runs", 1, 1e6, false));
+    if (!a->seed.empty())
+      o.stats.seed = static_cast<std::uint64_t>(parse_number(a->seed, "--seed", 0, 4294967295.0, false));
     const Report r = build_report(o);
     write_report(r);
     std::printf("report: %s/report.html (%zu of %zu sample runs ok; %zu metrics)\n", o.out_dir.c_str(),
                 r.sample_ok, r.sample.size(), r.metrics.size());
     return kExitOk;
-  } catch (const InputError& e) {
-    std::fprintf(stderr, "flume report: %s\n", e.what());
-    return kExitInvalidInput;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "flume report: %s\n", e.what());
-    return kExitInternal;
-  }
+  });
 }
 
 }  // namespace flume::report

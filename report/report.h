@@ -3,6 +3,10 @@
 //   write_report   writes report.html (self-contained: inline SVG and CSS, one inline check script, nothing
 //                  fetched), summary.json and the CSV tables into the output folder
 #pragma once
+
+namespace CLI {
+class App;
+}
 #include <cstddef>
 #include <map>
 #include <optional>
@@ -65,11 +69,7 @@ void write_report(const Report& report);
 // The HTML page alone (for tests).
 std::string render_html(const Report& report);
 
-// `flume report --db FILE --campaign NAME --out DIR [options]`.
-int report_main(int argc, char** argv);
+// `flume report --db FILE --campaign NAME --out DIR [options]` on the command line (common/command.h).
+void add_report_command(CLI::App& app);
 
 }  // namespace flume::report
-
-namespace flume {
-using report::report_main;
-}  // namespace flume

@@ -1,4 +1,4 @@
-// `flume run`, `flume bench`, `flume check`: argument parsing and exit codes over run_scene().
+// `flume run`, `flume bench`, `flume check`: their options, and what they run over run_scene().
 #include "solver/commands.h"
 
 #include <omp.h>
@@ -6,12 +6,14 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
+#include "common/command.h"
 #include "common/errors.h"
+#include "flume_version.h"
 #include "solver/run.h"
 #include "solver/scene.h"
 #include "solver/simulation.h"
@@ -22,95 +24,51 @@ namespace {
 struct Args {
   std::string scene;
   std::string out;
-  std::vector<Override> sets;
+  std::vector<std::string> sets;
   SimulationOptions options;
+  std::string backend = "cpu";
   long steps = 0;
   bool quiet = false;
   CheckpointOptions checkpoints;
+
+  std::vector<Override> overrides() const {
+    std::vector<Override> o;
+    for (const auto& s : sets) o.push_back(parse_override(s));
+    return o;
+  }
+  SimulationOptions simulation_options() const {
+    SimulationOptions o = options;
+    o.backend = backend == "cuda" ? Backend::kCuda : Backend::kCpu;
+    return o;
+  }
 };
 
-int parse_int(const char* flag, const char* text, long lo, long hi) {
-  char* end = nullptr;
-  const long v = std::strtol(text, &end, 10);
-  if (*end || v < lo || v > hi)
-    throw InputError(flag, "", "expects an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) +
-                                   "] (got '" + text + "')");
-  return static_cast<int>(v);
-}
-
-// Parses the options shared by the solver's commands. `need_out`/`need_steps` say which are required.
-Args parse_args(int argc, char** argv, bool need_out, bool need_steps) {
-  Args a;
-  for (int i = 1; i < argc; ++i) {
-    const std::string s = argv[i];
-    auto value = [&](const char* flag) -> const char* {
-      if (i + 1 >= argc) throw InputError(flag, "", "needs a value");
-      return argv[++i];
-    };
-    if (s == "--out") {
-      a.out = value("--out");
-    } else if (s == "--set") {
-      a.sets.push_back(parse_override(value("--set")));
-    } else if (s.rfind("--set=", 0) == 0) {
-      a.sets.push_back(parse_override(s.substr(6)));
-    } else if (s == "--threads") {
-      a.options.threads = parse_int("--threads", value("--threads"), 1, 1024);
-    } else if (s == "--steps") {
-      a.steps = parse_int("--steps", value("--steps"), 1, 1000000000);
-    } else if (s == "--backend") {
-      const std::string b = value("--backend");
-      if (b == "cpu") {
-        a.options.backend = Backend::kCpu;
-      } else if (b == "cuda") {
-        a.options.backend = Backend::kCuda;
-      } else {
-        throw InputError("--backend", "", "must be cpu or cuda (got '" + b + "')");
-      }
-    } else if (s == "--checkpoint-every") {
-      const char* text = value("--checkpoint-every");
-      char* end = nullptr;
-      const double v = std::strtod(text, &end);
-      if (*end || !(v >= 1 && v <= 1e7))
-        throw InputError("--checkpoint-every", "", std::string("expects wall-clock seconds in [1, 1e7] (got '") + text + "')");
-      a.checkpoints.every_s = v;
-    } else if (s == "--resume") {
-      a.checkpoints.resume = true;
-    } else if (s == "--quiet" || s == "-q") {
-      a.quiet = true;
-    } else if (!s.empty() && s[0] == '-') {
-      throw InputError(argv[0], s, "unknown option");
-    } else if (a.scene.empty()) {
-      a.scene = s;
-    } else {
-      throw InputError(argv[0], s, "unexpected argument (one scene file only)");
-    }
-  }
-  if (a.scene.empty()) throw InputError(argv[0], "", "needs a scene file (SCENE.json)");
-  if (need_out && a.out.empty()) throw InputError(argv[0], "--out", "is required (the run's output directory)");
-  if (need_steps && a.steps <= 0) throw InputError(argv[0], "--steps", "is required (a positive step count)");
+// The options every solver command takes: the scene, its overrides and the thread count.
+std::shared_ptr<Args> add_scene_options(CLI::App& app) {
+  auto a = std::make_shared<Args>();
+  app.add_option("SCENE", a->scene, "the scene file (docs/scene.md)")->required();
+  cli::add_set_option(app, a->sets, "override a scene field, e.g. --set solver.dx=0.01 (repeatable)");
+  app.add_option("--threads", a->options.threads, "OpenMP threads (default: all)")->check(CLI::Range(1, 1024));
+  app.add_option("--backend", a->backend, "cpu, or cuda when built with it")
+      ->check(CLI::IsMember({"cpu", "cuda"}))
+      ->default_str("cpu");
   return a;
-}
-
-template <typename F>
-int guarded(const char* cmd, F&& body) {
-  try {
-    return body();
-  } catch (const InputError& e) {
-    std::fprintf(stderr, "flume %s: error: %s\n", cmd, e.what());
-    return kExitInvalidInput;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "flume %s: internal error: %s\n", cmd, e.what());
-    return kExitInternal;
-  }
 }
 
 }  // namespace
 
-int run_main(int argc, char** argv) {
-  return guarded("run", [&] {
-    const Args a = parse_args(argc, argv, true, false);
-    const Scene scene = load_scene(a.scene, a.sets);
-    const RunOutcome r = run_scene(scene, a.options, a.out, !a.quiet, a.checkpoints);
+void add_run_command(CLI::App& app) {
+  auto a = add_scene_options(app);
+  app.add_option("--out", a->out, "the run's folder: result.h5, run.json (docs/results.md)")->required();
+  app.add_option("--checkpoint-every", a->checkpoints.every_s,
+                 "write DIR/checkpoint.bin every S wall-clock seconds (docs/checkpoints.md)")
+      ->check(CLI::Range(1.0, 1e7))
+      ->type_name("S");
+  app.add_flag("--resume", a->checkpoints.resume, "continue from DIR/checkpoint.bin");
+  app.add_flag("-q,--quiet", a->quiet, "no progress lines");
+  cli::on_parse(app, [a] {
+    const Scene scene = load_scene(a->scene, a->overrides());
+    const RunOutcome r = run_scene(scene, a->simulation_options(), a->out, !a->quiet, a->checkpoints);
     std::fprintf(stderr, "flume run: %s: %s (%ld steps, %zu particles, %.1f s, %.3g particle-steps/s)\n",
                  r.status == RunStatus::kOk ? "ok" : "unstable", r.message.c_str(), r.cost.steps, r.cost.particles,
                  r.cost.wall_s, r.cost.particle_steps_per_s);
@@ -118,24 +76,29 @@ int run_main(int argc, char** argv) {
   });
 }
 
-int bench_main(int argc, char** argv) {
-  return guarded("bench", [&] {
-    Args a = parse_args(argc, argv, false, true);
-    const Scene scene = load_scene(a.scene, a.sets);
-    auto sim = make_simulation(scene, a.options);
+void add_bench_command(CLI::App& app) {
+  auto a = add_scene_options(app);
+  app.add_option("--steps", a->steps, "time steps to time, after one warm-up step")
+      ->required()
+      ->check(CLI::Range(1L, 1000000000L));
+  cli::on_parse(app, [a] {
+    const Scene scene = load_scene(a->scene, a->overrides());
+    const SimulationOptions options = a->simulation_options();
+    auto sim = make_simulation(scene, options);
     // One warm-up step builds the block lists and touches the memory; the measured steps follow.
     sim->step();
     const long steps0 = sim->steps();
     const auto t0 = std::chrono::steady_clock::now();
     RunStatus st = RunStatus::kRunning;
-    for (long i = 0; i < a.steps && st == RunStatus::kRunning; ++i) st = sim->step();
+    for (long i = 0; i < a->steps && st == RunStatus::kRunning; ++i) st = sim->step();
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     const long steps = sim->steps() - steps0;
     nlohmann::json j = {{"scene", scene.file},
                         {"dimension", scene.dimension},
                         {"precision", to_string(scene.solver.precision)},
-                        {"backend", a.options.backend == Backend::kCuda ? "cuda" : "cpu"},
-                        {"threads", a.options.threads > 0 ? a.options.threads : omp_get_max_threads()},
+                        {"backend", options.backend == Backend::kCuda ? "cuda" : "cpu"},
+                        {"build", FLUME_BUILD_KIND},
+                        {"threads", options.threads > 0 ? options.threads : omp_get_max_threads()},
                         {"dx", scene.solver.dx},
                         {"status", st == RunStatus::kUnstable ? "unstable" : "ok"},
                         {"wall_s", wall},
@@ -150,10 +113,10 @@ int bench_main(int argc, char** argv) {
   });
 }
 
-int check_main(int argc, char** argv) {
-  return guarded("check", [&] {
-    const Args a = parse_args(argc, argv, false, false);
-    const Scene s = load_scene(a.scene, a.sets);
+void add_check_command(CLI::App& app) {
+  auto a = add_scene_options(app);
+  cli::on_parse(app, [a] {
+    const Scene s = load_scene(a->scene, a->overrides());
     std::printf("%s: scene '%s', %dD, dx = %g m, ppc = %d, %s, end_time = %g s, %zu water boxes, %zu boundaries\n",
                 s.file.c_str(), s.name.c_str(), s.dimension, s.solver.dx, s.solver.ppc,
                 to_string(s.solver.precision), s.solver.end_time, s.water.size(), s.boundaries.size());

@@ -1,8 +1,12 @@
-// Entry points of the solver's subcommands (`flume run`, `flume bench`, `flume check`).
+// The solver's commands (`flume run`, `flume bench`, `flume check`) on the command line (common/command.h).
 #pragma once
 
+namespace CLI {
+class App;
+}
+
 namespace flume {
-int run_main(int argc, char** argv);
-int bench_main(int argc, char** argv);
-int check_main(int argc, char** argv);
+void add_run_command(CLI::App& app);
+void add_bench_command(CLI::App& app);
+void add_check_command(CLI::App& app);
 }  // namespace flume

@@ -15,6 +15,7 @@
 
 #include "calibration/records.h"
 #include "campaigns/engine.h"
+#include "common/command.h"
 #include "common/errors.h"
 #include "common/plot/figure.h"
 #include "solver/scene.h"
@@ -704,48 +705,25 @@ void write_tradeoff(const TradeoffSpec& spec, const TradeoffResult& result, cons
   fig.save((fs::path(out_dir) / "tradeoff.svg").string());
 }
 
-int study_main(int argc, char** argv) {
-  static const char* kUsage =
-      "usage:\n"
-      "  flume study tradeoff SPEC.json --db FILE [--out DIR] [--workers N]\n"
-      "      runs (or resumes) every setting as a campaign in FILE, then writes DIR/tradeoff.{md,csv,svg}\n"
-      "      (DIR: FILE.study/<name> by default)\n";
-  if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h")) {
-    std::fputs(kUsage, argc < 2 ? stderr : stdout);
-    return argc < 2 ? kExitInvalidInput : kExitOk;
-  }
-  try {
-    if (std::string(argv[1]) != "tradeoff")
-      throw InputError("command line", argv[1], std::string("unknown study (known: tradeoff)\n") + kUsage);
-    std::string spec_file, db, out;
+void add_study_command(CLI::App& app) {
+  struct Args {
+    std::string spec, db, out;
     int workers = 1;
-    for (int i = 2; i < argc; ++i) {
-      const std::string a = argv[i];
-      auto value = [&]() -> std::string {
-        if (i + 1 >= argc) throw InputError("command line", a, "needs a value");
-        return argv[++i];
-      };
-      if (a == "--db") {
-        db = value();
-      } else if (a == "--out") {
-        out = value();
-      } else if (a == "--workers") {
-        const std::string v = value();
-        char* end = nullptr;
-        const long n = std::strtol(v.c_str(), &end, 10);
-        if (*end || n < 1 || n > 4096)
-          throw InputError("command line", "--workers", "must be an integer in [1, 4096] (got '" + v + "')");
-        workers = static_cast<int>(n);
-      } else if (!a.empty() && a[0] == '-') {
-        throw InputError("command line", a, "unknown option");
-      } else if (spec_file.empty()) {
-        spec_file = a;
-      } else {
-        throw InputError("command line", a, "one study spec only");
-      }
-    }
-    if (spec_file.empty()) throw InputError("command line", "SPEC", "is required (the study spec file)");
-    if (db.empty()) throw InputError("command line", "--db", "is required (the campaign database file)");
+  };
+  auto a = std::make_shared<Args>();
+  CLI::App* sub = app.add_subcommand(
+      "tradeoff",
+      "runs (or resumes) every setting as a campaign in FILE, then writes DIR/tradeoff.{md,csv,svg}: error against "
+      "cost over fidelity settings, Pareto front");
+  sub->add_option("SPEC", a->spec, "the study spec (docs/tradeoff.md)")->required();
+  sub->add_option("--db", a->db, "the campaign database")->required();
+  sub->add_option("--out", a->out, "the folder for tradeoff.{md,csv,svg} (default: FILE.study/<name>)");
+  sub->add_option("--workers", a->workers, "runs at a time")->check(CLI::Range(1, 4096));
+  cli::on_parse(*sub, [a]() -> int {
+    const std::string& spec_file = a->spec;
+    const std::string& db = a->db;
+    const int workers = a->workers;
+    std::string out = a->out;
     const TradeoffSpec spec = load_tradeoff_spec(spec_file);
     if (out.empty()) out = (fs::path(db + ".study") / spec.campaign.name).string();
     campaigns::EngineOptions opt;
@@ -759,13 +737,7 @@ int study_main(int argc, char** argv) {
     write_tradeoff(spec, result, out);
     std::printf("%s\nwrote %s/tradeoff.{md,csv,svg}\n", tradeoff_markdown(spec, result).c_str(), out.c_str());
     return kExitOk;
-  } catch (const InputError& e) {
-    std::fprintf(stderr, "%s\n", e.what());
-    return kExitInvalidInput;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "flume study: %s\n", e.what());
-    return kExitInternal;
-  }
+  });
 }
 
 }  // namespace flume::study

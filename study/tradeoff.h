@@ -24,6 +24,10 @@
 // floors the relative difference's denominator: |value - reference| / max(|reference|, scale). At least one
 // gauge, load cell or metric; metrics need a reference setting (a measured record has none).
 #pragma once
+
+namespace CLI {
+class App;
+}
 #include <cmath>
 #include <optional>
 #include <string>
@@ -112,6 +116,6 @@ void write_tradeoff(const TradeoffSpec& spec, const TradeoffResult& result, cons
 std::string tradeoff_markdown(const TradeoffSpec& spec, const TradeoffResult& result);
 
 // flume study tradeoff SPEC --db FILE [--out DIR] [--workers N]
-int study_main(int argc, char** argv);
+void add_study_command(CLI::App& app);
 
 }  // namespace flume::study

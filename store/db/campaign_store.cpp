@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "common/errors.h"
+#include "common/number_text.h"
 
 namespace flume::store {
 namespace {
@@ -138,15 +139,7 @@ std::string csv(const std::string& s) {
   return q + "\"";
 }
 
-// Shortest text that reads back to the same double (%.17g prints 0.2 as 0.20000000000000001).
-std::string format_number(double v) {
-  char buf[32];
-  for (int precision = 15; precision <= 17; ++precision) {
-    std::snprintf(buf, sizeof buf, "%.*g", precision, v);
-    if (std::strtod(buf, nullptr) == v) break;
-  }
-  return buf;
-}
+std::string format_number(double v) { return round_trip_text(v); }
 
 }  // namespace
 
