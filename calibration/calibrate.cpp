@@ -20,6 +20,7 @@
 
 #include "calibration/evaluator.h"
 #include "calibration/report.h"
+#include "common/duration.h"
 #include "common/errors.h"
 #include "flume_version.h"
 
@@ -147,7 +148,23 @@ class Driver {
     e.value = pt.terms.value;
     e.terms_json = terms_json(pt.terms).dump();
     evaluator_.with_store([&](store::CampaignStore& db) { db.record_evaluation(campaign_, e); });
+    report_progress(e, pt);
     return pt;
+  }
+
+  // One line per evaluation on stderr, so that an hour-long calibration is seen to move (one fprintf: the
+  // lines of parallel starts don't interleave).
+  void report_progress(const store::Evaluation& e, const Point& pt) const {
+    std::string params;
+    for (const auto& [path, v] : json::parse(e.params_json).items()) {
+      char buf[64];
+      std::snprintf(buf, sizeof buf, "%s%s = %.6g", params.empty() ? "" : ", ", path.c_str(), v.get<double>());
+      params += buf;
+    }
+    const double wall = std::chrono::duration<double>(Clock::now() - start_time_).count();
+    std::fprintf(stderr, "flume calibrate: %s start %d #%d: objective %.6g (%s), run %lld %s, wall %s\n",
+                 e.phase.c_str(), static_cast<int>(e.start), static_cast<int>(e.seq), e.value, params.c_str(),
+                 static_cast<long long>(pt.run->run_id), store::to_string(pt.run->status), hms(wall).c_str());
   }
 
   bool past_budget() const {

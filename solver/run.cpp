@@ -2,6 +2,8 @@
 
 #include <sys/resource.h>
 
+#include <Eigen/Geometry>
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -11,6 +13,7 @@
 #include "solver/checkpoint.h"
 #include "solver/debris_coupling.h"
 #include "solver/debris_metrics.h"
+#include "solver/progress.h"
 #include "solver/run_output.h"
 #include "store/h5/run_file.h"
 
@@ -94,6 +97,37 @@ void write_debris(h5::RunFile& file, const DebrisRecorder& rec) {
     }
 }
 
+// The boxes' poses for ParaView (result.xmf's `debris` grid): one frame per resampled sample, each body a
+// hexahedron of its size about its centre of mass, rotated by its orientation.
+void write_debris_frames(h5::RunFile& file, const Scene& scene, const DebrisRecorder& rec) {
+  const int bodies = rec.body_count();
+  if (bodies == 0) return;
+  std::vector<Eigen::Vector3d> half(static_cast<std::size_t>(bodies), Eigen::Vector3d::Zero());
+  std::size_t frames = rec.resampled(0).size();
+  for (int b = 0; b < bodies; ++b) {
+    for (const DebrisBody& body : scene.debris.bodies)
+      if (body.name == rec.name(b)) half[static_cast<std::size_t>(b)] = 0.5 * Eigen::Vector3d(body.size.data());
+    frames = std::min(frames, rec.resampled(b).size());
+  }
+  static const double kCorner[8][3] = {{-1, -1, -1}, {1, -1, -1}, {1, 1, -1}, {-1, 1, -1},
+                                       {-1, -1, 1},  {1, -1, 1},  {1, 1, 1},  {-1, 1, 1}};
+  std::vector<float> corners(static_cast<std::size_t>(bodies) * 24);
+  for (std::size_t i = 0; i < frames; ++i) {
+    for (int b = 0; b < bodies; ++b) {
+      const DebrisSeries& s = rec.resampled(b);
+      const auto& q = s.orientation[i];
+      const Eigen::Quaterniond rot(q[0], q[1], q[2], q[3]);
+      const Eigen::Vector3d centre(s.position[i].data());
+      for (int c = 0; c < 8; ++c) {
+        const Eigen::Vector3d local(kCorner[c][0], kCorner[c][1], kCorner[c][2]);
+        const Eigen::Vector3d p = centre + rot * local.cwiseProduct(half[static_cast<std::size_t>(b)]);
+        for (int k = 0; k < 3; ++k) corners[static_cast<std::size_t>((b * 8 + c) * 3 + k)] = static_cast<float>(p[k]);
+      }
+    }
+    file.add_box_frame(rec.resampled(0).time[i], static_cast<std::size_t>(bodies), corners.data());
+  }
+}
+
 void add_snapshot(h5::RunFile& file, const Simulation& sim) {
   std::vector<double> xyz, vel, p;
   sim.particle_positions(xyz);
@@ -109,10 +143,6 @@ RunOutcome run_scene(const Scene& scene, const SimulationOptions& options, const
                      bool progress, const CheckpointOptions& checkpoints) {
   namespace fs = std::filesystem;
   const bool checkpointing = checkpoints.every_s > 0 || checkpoints.resume;
-  if (checkpointing && scene.instruments.snapshot_rate_hz > 0)
-    throw InputError(scene.file, "instruments.snapshot_rate_hz",
-                     "a checkpointed or resumed run cannot keep snapshots yet (those before the checkpoint would "
-                     "be lost): set it to 0 or run without --checkpoint-every/--resume");
   if (checkpointing && options.backend == Backend::kCuda)
     throw InputError("--backend", "cuda", "the CUDA backend does not checkpoint yet: run with --backend cpu, or "
                                           "without --checkpoint-every/--resume");
@@ -132,14 +162,18 @@ RunOutcome run_scene(const Scene& scene, const SimulationOptions& options, const
     if (progress)
       std::fprintf(stderr, "resumed from %s at t = %.3f s, step %ld\n", ckpt_path.c_str(), sim->time(), sim->steps());
   }
-  h5::RunFile file((fs::path(out_dir) / "result.h5").string());
+  // A resumed run keeps the snapshots the stopped one took before its checkpoint (in result.h5.part).
+  const std::string h5_path = (fs::path(out_dir) / "result.h5").string();
+  h5::RunFile file = checkpoints.resume ? h5::RunFile(h5_path, sim->time()) : h5::RunFile(h5_path);
   file.set_attribute("/", "status", "running");
 
   const double snap_period = scene.instruments.snapshot_rate_hz > 0 ? 1.0 / scene.instruments.snapshot_rate_hz : 0;
   double next_snap = 0;
-  double next_report = 0;
-  if (checkpoints.resume)  // the next tenth of the run after the checkpoint
-    while (next_report <= sim->time()) next_report += scene.solver.end_time / 10;
+  for (const double t : file.snapshot_times())  // the times a run without a stop would have had next
+    while (next_snap <= t + 1e-12) next_snap += snap_period;
+  if (checkpoints.resume && progress && snap_period > 0)
+    std::fprintf(stderr, "kept %zu snapshot(s) taken before the checkpoint\n", file.snapshot_count());
+  Progress report(scene.solver.end_time, sim->time(), sim->particle_count());
   const auto t0 = std::chrono::steady_clock::now();
   auto last_ckpt = t0;
   const auto save = [&] {
@@ -165,11 +199,7 @@ RunOutcome run_scene(const Scene& scene, const SimulationOptions& options, const
     }
     if (status != RunStatus::kRunning) break;
     status = sim->step();
-    if (progress && sim->time() >= next_report) {
-      std::fprintf(stderr, "t = %.3f s / %.3f s, step %ld, dt = %.3g s\n", sim->time(), scene.solver.end_time,
-                   sim->steps(), sim->last_dt());
-      while (next_report <= sim->time()) next_report += scene.solver.end_time / 10;
-    }
+    if (progress) report.step(sim->time(), sim->steps(), sim->last_dt());
     if (checkpoints.every_s > 0 &&
         (status == RunStatus::kOk ||
          (status == RunStatus::kRunning &&
@@ -190,6 +220,7 @@ RunOutcome run_scene(const Scene& scene, const SimulationOptions& options, const
   if (DebrisCoupling* debris = sim->debris()) {
     debris->finish();
     write_debris(file, debris->recorder());
+    write_debris_frames(file, scene, debris->recorder());
     // Touching a column: within a tenth of a cell or 2 mm, whichever is larger (the grid resolves no finer).
     for (const auto& [k, v] : debris_metrics(scene, debris->recorder(), std::max(0.002, 0.1 * scene.solver.dx)))
       out.metrics[k] = v;

@@ -169,6 +169,22 @@ struct RunFile::Impl {
   bool finalized = false;
   bool compress = false;
   std::vector<SnapshotRecord> snapshots;
+  struct BoxFrame {
+    double time;
+    std::size_t bodies;
+  };
+  std::vector<BoxFrame> box_frames;
+
+  void open_file(bool create) {
+    QuietErrors quiet;
+    Id fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose);
+    // STRONG: closing the file closes anything still open in it, so finalize() really ends with a closed file.
+    if (!fapl.valid() || H5Pset_fclose_degree(fapl.get(), H5F_CLOSE_STRONG) < 0) fail(part, "cannot set up file access");
+    file = Id(create ? H5Fcreate(part.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl.get())
+                     : H5Fopen(part.c_str(), H5F_ACC_RDWR, fapl.get()),
+              H5Fclose);
+    if (!file.valid()) fail(part, create ? "cannot create HDF5 file" : "cannot open HDF5 file");
+  }
 
   void require_open() const {
     if (finalized) throw std::logic_error(path + ": written to after finalize()");
@@ -241,8 +257,8 @@ struct RunFile::Impl {
     std::ostringstream x;
     x << "<?xml version=\"1.0\" ?>\n"
       << "<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n"
-      << "<Xdmf Version=\"2.0\">\n <Domain>\n"
-      << "  <Grid Name=\"particles\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
+      << "<Xdmf Version=\"2.0\">\n <Domain>\n";
+    if (!snapshots.empty()) x << "  <Grid Name=\"particles\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
     auto item = [&](const std::string& dataset, std::size_t n, int cols) {
       std::string dims = std::to_string(n) + (cols > 1 ? " " + std::to_string(cols) : std::string());
       x << "     <DataItem Dimensions=\"" << dims << "\" NumberType=\"Float\" Precision=\"4\" Format=\"HDF\">"
@@ -269,7 +285,29 @@ struct RunFile::Impl {
       }
       x << "   </Grid>\n";
     }
-    x << "  </Grid>\n </Domain>\n</Xdmf>\n";
+    if (!snapshots.empty()) x << "  </Grid>\n";
+    // The debris boxes: a temporal collection of their own (ParaView lists both grids).
+    if (!box_frames.empty()) {
+      x << "  <Grid Name=\"debris\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
+      for (std::size_t k = 0; k < box_frames.size(); ++k) {
+        const BoxFrame& f = box_frames[k];
+        x << "   <Grid Name=\"debris_" << snapshot_name(k) << "\" GridType=\"Uniform\">\n"
+          << "    <Time Value=\"" << format_double(f.time) << "\"/>\n"
+          << "    <Topology TopologyType=\"Hexahedron\" NumberOfElements=\"" << f.bodies << "\">\n"
+          << "     <DataItem Dimensions=\"" << f.bodies << " 8\" NumberType=\"Int\" Format=\"XML\">";
+        for (std::size_t i = 0; i < 8 * f.bodies; ++i) x << (i % 8 == 0 ? "\n      " : " ") << i;
+        x << "\n     </DataItem>\n    </Topology>\n    <Geometry GeometryType=\"XYZ\">\n";
+        x << "     <DataItem Dimensions=\"" << 8 * f.bodies << " 3\" NumberType=\"Float\" Precision=\"4\" "
+          << "Format=\"HDF\">" << xml_escape(h5_name + ":/debris_frames/" + snapshot_name(k) + "/corners")
+          << "</DataItem>\n    </Geometry>\n"
+          << "    <Attribute Name=\"body\" AttributeType=\"Scalar\" Center=\"Cell\">\n"
+          << "     <DataItem Dimensions=\"" << f.bodies << "\" NumberType=\"Int\" Format=\"XML\">";
+        for (std::size_t b = 0; b < f.bodies; ++b) x << (b ? " " : "") << b;
+        x << "</DataItem>\n    </Attribute>\n   </Grid>\n";
+      }
+      x << "  </Grid>\n";
+    }
+    x << " </Domain>\n</Xdmf>\n";
 
     std::string tmp = xmf_path + ".part";
     {
@@ -293,14 +331,57 @@ RunFile::RunFile(std::string path) : impl_(std::make_unique<Impl>()) {
   std::error_code ec;
   std::filesystem::remove(impl_->path, ec);
   std::filesystem::remove(xdmf_path(), ec);
+  impl_->open_file(true);
+  set_attribute("/", "flume_version", FLUME_VERSION);
+  set_attribute("/", "flume_git_version", FLUME_GIT_VERSION);
+}
 
-  QuietErrors quiet;
-  Id fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose);
-  // STRONG: closing the file closes anything still open in it, so finalize() really ends with a closed file.
-  if (!fapl.valid() || H5Pset_fclose_degree(fapl.get(), H5F_CLOSE_STRONG) < 0)
-    fail(impl_->part, "cannot set up file access");
-  impl_->file = Id(H5Fcreate(impl_->part.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl.get()), H5Fclose);
-  if (!impl_->file.valid()) fail(impl_->part, "cannot create HDF5 file");
+RunFile::RunFile(std::string path, double keep_snapshots_before) : impl_(std::make_unique<Impl>()) {
+  impl_->path = std::move(path);
+  impl_->part = impl_->path + ".part";
+  impl_->compress = deflate_available();
+  std::error_code ec;
+  // A finished run extended to a later end time: its result becomes the file in progress again.
+  if (!std::filesystem::exists(impl_->part) && std::filesystem::exists(impl_->path))
+    std::filesystem::rename(impl_->path, impl_->part, ec);
+  std::filesystem::remove(impl_->path, ec);
+  std::filesystem::remove(xdmf_path(), ec);
+  // What the stopped run wrote: its snapshots (names sort in index order) and, if it was killed while writing
+  // its records, parts of those, which the resumed run writes again.
+  std::vector<SnapshotRecord> kept;
+  std::vector<std::string> drop;
+  bool usable = std::filesystem::exists(impl_->part);
+  if (usable) {
+    try {
+      Reader r(impl_->part);
+      for (const std::string& name : r.list("/"))
+        if (name != "snapshots") drop.push_back("/" + name);
+      if (r.exists("/snapshots"))
+        for (const std::string& name : r.list("/snapshots")) {
+          const std::string base = "/snapshots/" + name;
+          const double t = r.number_attribute(base, "time");
+          if (!(t < keep_snapshots_before) || name != snapshot_name(kept.size())) {
+            drop.push_back(base);
+            continue;
+          }
+          SnapshotRecord rec{kept.size(), t, static_cast<std::size_t>(r.number_attribute(base, "count")), {}, {}};
+          for (const std::string& field : r.list(base))
+            if (field != "xyz") (r.shape(base + "/" + field).size() == 1 ? rec.scalars : rec.vectors).push_back(field);
+          kept.push_back(std::move(rec));
+        }
+    } catch (const std::exception&) {
+      usable = false;  // a file the kill left unreadable: its snapshots are lost, the run goes on
+      kept.clear();
+      drop.clear();
+    }
+  }
+  impl_->open_file(!usable);
+  {
+    QuietErrors quiet;
+    for (const std::string& link : drop)
+      if (H5Ldelete(impl_->file.get(), link.c_str(), H5P_DEFAULT) < 0) fail(impl_->part, "cannot drop " + link);
+  }
+  impl_->snapshots = std::move(kept);
   set_attribute("/", "flume_version", FLUME_VERSION);
   set_attribute("/", "flume_git_version", FLUME_GIT_VERSION);
 }
@@ -316,6 +397,24 @@ std::string RunFile::xdmf_path() const {
 }
 bool RunFile::finalized() const { return impl_->finalized; }
 std::size_t RunFile::snapshot_count() const { return impl_->snapshots.size(); }
+std::vector<double> RunFile::snapshot_times() const {
+  std::vector<double> t;
+  for (const auto& s : impl_->snapshots) t.push_back(s.time);
+  return t;
+}
+
+void RunFile::add_box_frame(double time, std::size_t bodies, const float* corners) {
+  impl_->require_open();
+  if (bodies > 0 && !corners) throw std::invalid_argument(impl_->path + ": box frame with no corners");
+  QuietErrors quiet;
+  const std::string base = "/debris_frames/" + snapshot_name(impl_->box_frames.size());
+  Id g = impl_->group(base);
+  impl_->write_dataset(g.get(), base + "/corners", "corners", H5T_IEEE_F32LE, H5T_NATIVE_FLOAT,
+                       {static_cast<hsize_t>(bodies) * 8, 3}, corners, false);
+  g.reset();
+  set_attribute(base, "time", time);
+  impl_->box_frames.push_back({time, bodies});
+}
 
 void RunFile::write_series(const std::string& group_path, const std::string& name,
                            const std::vector<double>& values) {
@@ -426,7 +525,7 @@ void RunFile::finalize() {
     if (!impl_->file.close()) fail(impl_->part, "cannot close");
   }
   std::string xmf = xdmf_path();
-  if (!impl_->snapshots.empty()) {
+  if (!impl_->snapshots.empty() || !impl_->box_frames.empty()) {
     impl_->write_xdmf(xmf);
   }
   // The HDF5 file is renamed last: its final name existing is the signal that the run's output is complete.

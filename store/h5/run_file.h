@@ -5,6 +5,8 @@
 //   /gauges/<name>/{time, elevation}   /probes/<name>/{time, velocity (n x D)}
 //   /loads/<name>/{time, force (n x D)} /diagnostics/{time, mass, kinetic, ...}
 //   /snapshots/<00000>/{xyz (n x 3), <scalar> (n), <vector> (n x 3)} with attribute `time`
+//   /debris_frames/<00000>/corners (bodies x 8 x 3) with attribute `time`: the debris boxes for ParaView
+// The full reference of the solver's file is docs/results.md.
 //
 // Crash safety: everything goes to `<path>.part`; finalize() closes it and renames it to `<path>`, so a
 // `result.h5` that exists is always complete. A killed process leaves only the `.part` file.
@@ -28,6 +30,10 @@ class RunFile {
  public:
   // Creates (truncating) `<path>.part`. Throws std::runtime_error naming the file when it cannot.
   explicit RunFile(std::string path);
+  // A resumed run: reopens the `<path>.part` a stopped run left and keeps its snapshots taken before
+  // `keep_snapshots_before` (the checkpoint's time); everything else in it is dropped, to be written again.
+  // Without a `.part` file it starts a new one, as the constructor above (kept_snapshots() then says 0).
+  RunFile(std::string path, double keep_snapshots_before);
   // Closes the `.part` file without renaming it: a run that did not reach finalize() is not a result.
   ~RunFile();
   RunFile(const RunFile&) = delete;
@@ -63,6 +69,13 @@ class RunFile {
   std::size_t add_snapshot(double time, std::size_t n, const float* xyz,
                            const std::vector<Field>& scalars = {}, const std::vector<Field>& vectors = {});
   std::size_t snapshot_count() const;
+  // The times of the snapshots so far (those kept on a resume included).
+  std::vector<double> snapshot_times() const;
+
+  // Rigid boxes for the XDMF sidecar, one frame per call: `corners` holds bodies x 8 x 3 floats, each body's
+  // corners in VTK hexahedron order (the -z face counter-clockwise seen from above, then the +z face).
+  // Stored as /debris_frames/<index, 5 digits>/corners with attribute `time`.
+  void add_box_frame(double time, std::size_t bodies, const float* corners);
 
   // Pushes buffered data to the `.part` file (it stays `.part`).
   void flush();

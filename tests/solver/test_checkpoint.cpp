@@ -3,7 +3,7 @@
 // diagnostics' energy sums to their reduction order's rounding). Covered:
 // the Waseda 2D basin (reservoir hold and release, gate, gauges, section), its apron fed through the inflow
 // boundary, a floating box, a finished run extended to a later end time through run_scene's file, and the
-// refusals (another scene, a missing, corrupt or truncated file, snapshots).
+// refusals (another scene, a missing, corrupt or truncated file), and particle snapshots kept across a resume.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -253,10 +253,6 @@ TEST(Checkpoint, RefusesWhatDoesNotFit) {
   EXPECT_EQ(error_field([&] { run_scene(scene("reservoir.gate_height_m=0.12"), {}, out, false, resume); },
                         "another scene"),
             "scene");
-  // Snapshots would be lost before the checkpoint.
-  EXPECT_EQ(error_field([&] { run_scene(scene("instruments.snapshot_rate_hz=10"), {}, out, false, every); },
-                        "snapshots"),
-            "instruments.snapshot_rate_hz");
   // The CUDA backend, before anything runs.
   SimulationOptions cuda;
   cuda.backend = Backend::kCuda;
@@ -273,6 +269,52 @@ TEST(Checkpoint, RefusesWhatDoesNotFit) {
   // The intact file resumes (a finished run at its own end time: nothing more to do).
   std::ofstream(ck, std::ios::binary | std::ios::trunc) << bytes;
   EXPECT_EQ(run_scene(scene(""), {}, out, false, resume).status, RunStatus::kOk);
+  fs::remove_all(dir);
+}
+
+// Snapshots and checkpoints together: a finished run with snapshots, extended to a later end time from its
+// checkpoint, keeps the snapshots it took (to the bit) and adds those of the extension, as many and at the same
+// times as a run straight to the end. (Before this, a checkpointed run with snapshots was refused.)
+TEST(Checkpoint, SnapshotsSurviveAnExtension) {
+  const fs::path dir = temp_dir("snapshots");
+  const std::string scene = (dir / "dam.json").string();
+  std::ofstream(scene) << R"({"name": "dam", "dimension": 2,
+    "domain": {"lo": [0.0, 0.0], "hi": [1.0, 0.5], "walls": "slip"},
+    "solver": {"dx": 0.02, "ppc": 4, "end_time": 0.2},
+    "water": [{"lo": [0.05, 0.05], "hi": [0.35, 0.25]}],
+    "instruments": {"snapshot_rate_hz": 50}})";
+  const std::string cmd = std::string(FLUME_EXE) + " run " + scene + " --threads 1 --quiet --out ";
+  ASSERT_EQ(test::run_command(cmd + (dir / "straight").string()), 0);
+  const std::string split = (dir / "split").string();
+  ASSERT_EQ(test::run_command(cmd + split + " --set solver.end_time=0.1 --checkpoint-every 1"), 0);
+  fs::copy_file(dir / "split" / "result.h5", dir / "first.h5");
+  ASSERT_EQ(test::run_command(cmd + split + " --resume"), 0);
+
+  auto times = [](const fs::path& file) {
+    h5::Reader r(file.string());
+    std::vector<double> t;
+    for (const auto& name : r.list("/snapshots")) t.push_back(r.number_attribute("/snapshots/" + name, "time"));
+    return t;
+  };
+  const std::vector<double> straight = times(dir / "straight" / "result.h5"), first = times(dir / "first.h5"),
+                            extended = times(dir / "split" / "result.h5");
+  ASSERT_EQ(straight.size(), 11u);  // 0, 0.02, ..., 0.2
+  EXPECT_EQ(first.size(), 6u);
+  ASSERT_EQ(extended.size(), straight.size());
+  // The same sample times (the first part's last step was cut short to land on 0.1 s: within a step after it).
+  for (std::size_t k = 0; k < straight.size(); ++k) EXPECT_NEAR(extended[k], straight[k], 2e-3) << k;
+  // The first part's snapshots, kept to the bit (the one at 0.1 s taken again from the checkpointed state).
+  h5::Reader a((dir / "first.h5").string()), b((dir / "split" / "result.h5").string());
+  for (const auto& name : a.list("/snapshots"))
+    EXPECT_TRUE(a.read_vector("/snapshots/" + name + "/xyz") == b.read_vector("/snapshots/" + name + "/xyz")) << name;
+  // ParaView's sidecar lists every snapshot.
+  std::ifstream xmf(dir / "split" / "result.xmf");
+  const std::string text((std::istreambuf_iterator<char>(xmf)), std::istreambuf_iterator<char>());
+  std::size_t grids = 0;
+  for (std::size_t at = text.find("GridType=\"Uniform\""); at != std::string::npos;
+       at = text.find("GridType=\"Uniform\"", at + 1))
+    ++grids;
+  EXPECT_EQ(grids, straight.size());
   fs::remove_all(dir);
 }
 
