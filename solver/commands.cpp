@@ -88,11 +88,13 @@ void add_bench_command(CLI::App& app) {
     // One warm-up step builds the block lists and touches the memory; the measured steps follow.
     sim->step();
     const long steps0 = sim->steps();
+    const long pairs0 = sim->neighbour_interactions();
     const auto t0 = std::chrono::steady_clock::now();
     RunStatus st = RunStatus::kRunning;
     for (long i = 0; i < a->steps && st == RunStatus::kRunning; ++i) st = sim->step();
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     const long steps = sim->steps() - steps0;
+    const long pairs = sim->neighbour_interactions() - pairs0;
     nlohmann::json j = {{"scene", scene.file},
                         {"dimension", scene.dimension},
                         {"precision", to_string(scene.solver.precision)},
@@ -106,6 +108,8 @@ void add_bench_command(CLI::App& app) {
                         {"particles", sim->particle_count()},
                         {"particle_steps_per_s", wall > 0 ? double(steps) * double(sim->particle_count()) / wall : 0},
                         {"peak_rss_mb", peak_rss_mb()},
+                        {"method", to_string(scene.solver.method)},
+                        {"neighbour_interactions_per_s", wall > 0 ? double(pairs) / wall : 0},
                         {"grid_mb", sim->grid_bytes() / 1048576.0},
                         {"active_blocks", sim->active_blocks()}};
     std::printf("%s\n", j.dump(2).c_str());
@@ -117,8 +121,8 @@ void add_check_command(CLI::App& app) {
   auto a = add_scene_options(app);
   cli::on_parse(app, [a] {
     const Scene s = load_scene(a->scene, a->overrides());
-    std::printf("%s: scene '%s', %dD, dx = %g m, ppc = %d, %s, end_time = %g s, %zu water boxes, %zu boundaries\n",
-                s.file.c_str(), s.name.c_str(), s.dimension, s.solver.dx, s.solver.ppc,
+    std::printf("%s: scene '%s', %dD, %s, dx = %g m, ppc = %d, %s, end_time = %g s, %zu water boxes, %zu boundaries\n",
+                s.file.c_str(), s.name.c_str(), s.dimension, to_string(s.solver.method), s.solver.dx, s.solver.ppc,
                 to_string(s.solver.precision), s.solver.end_time, s.water.size(), s.boundaries.size());
     return kExitOk;
   });

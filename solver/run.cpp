@@ -66,6 +66,7 @@ void write_record(h5::RunFile& file, const Scene& scene, const Record& record) {
   file.set_attribute("/", "scene_file", scene.file);
   file.set_attribute("/", "scene_json", scene.source_json);
   file.set_attribute("/", "dimension", scene.dimension);
+  file.set_attribute("/", "method", to_string(scene.solver.method));
   file.set_attribute("/", "dx", scene.solver.dx);
   file.set_attribute("/", "flume_version", std::string(FLUME_VERSION) + " (" + FLUME_GIT_VERSION + ")");
 }

@@ -80,6 +80,7 @@ void write_run_json(const std::string& path, RunStatus status, const std::string
   j["status"] = status_name(status);
   j["message"] = message;
   j["scene"] = scene.file;
+  j["method"] = to_string(scene.solver.method);
   // The scene as it ran (overrides applied); parsed back, it is the scene file's JSON.
   if (!scene.source_json.empty()) j["scene_json"] = nlohmann::json::parse(scene.source_json);
   j["flume_version"] = std::string(FLUME_VERSION) + " (" + FLUME_GIT_VERSION + ")";

@@ -594,6 +594,7 @@ Scene parse(const json& root_json, const std::string& file) {
   {
     Reader r = root.object("solver");
     auto& s = sc.solver;
+    s.method = r.choice<SolverMethod>("method", SolverMethod::kMpm, {{"mpm", SolverMethod::kMpm}, {"sph", SolverMethod::kSph}});
     double min_extent = kInf;
     for (int d = 0; d < dim; ++d) min_extent = std::min(min_extent, sc.domain_hi[d] - sc.domain_lo[d]);
     s.dx = r.number("dx", std::nullopt, 0.0, min_extent / 4, true, false);
@@ -612,6 +613,18 @@ Scene parse(const json& root_json, const std::string& file) {
     Vec3d g{};
     g[up] = -9.80665;
     s.gravity = r.vec("gravity", dim, g);
+    r.finish();
+  }
+
+  {
+    Reader r = root.object("sph");
+    auto& p = sc.sph;
+    p.coefh = r.number("coefh", 1.0, 0.5, 2.0);
+    p.cfl = r.number("cfl", 0.2, 0.0, 0.5, true, false);
+    p.density_diffusion = r.number("density_diffusion", 0.1, 0.0, 1.0);
+    p.viscosity = r.choice<SphViscosity>("viscosity", SphViscosity::kLaminarSps,
+                                         {{"laminar_sps", SphViscosity::kLaminarSps}, {"artificial", SphViscosity::kArtificial}});
+    p.artificial_alpha = r.number("artificial_alpha", 0.01, 0.0, 1.0);
     r.finish();
   }
 
@@ -935,6 +948,7 @@ const char* to_string(BoundaryCondition c) {
   }
 }
 const char* to_string(Precision p) { return p == Precision::kFloat ? "float" : "double"; }
+const char* to_string(SolverMethod m) { return m == SolverMethod::kSph ? "sph" : "mpm"; }
 const char* to_string(ForcingModel m) {
   switch (m) {
     case ForcingModel::kExponential: return "exponential";

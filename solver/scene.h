@@ -43,7 +43,11 @@ struct WaterRegion {
   double surface = 0.0;
 };
 
+// The solver: MLS-MPM (the default) or weakly compressible SPH (solver/sph/, docs/sph.md).
+enum class SolverMethod { kMpm, kSph };
+
 struct SolverSettings {
+  SolverMethod method = SolverMethod::kMpm;
   double dx = 0.01;
   int ppc = 4;  // particles per cell per axis is ppc^(1/D) rounded: ppc must be a perfect power (2D: 1,4,9; 3D: 1,8,27)
   double cfl = 0.4;
@@ -59,6 +63,17 @@ struct FluidSettings {
   double gamma = 7.0;            // Tait/Murnaghan exponent
   double viscosity = 1.0e-3;     // Pa s
   double jbar_psi = 0.0;         // paper eqs. 3-4: 0 = plain MLS-MPM, 1 = fully grid-averaged J
+};
+
+// SPH's own settings (the `sph` section; read whatever the method, used when solver.method is sph). Particles
+// sit on the same lattice as MPM's (dx / ppc^(1/D) apart), so gauges and masses are the same.
+enum class SphViscosity { kLaminarSps, kArtificial };
+struct SphSettings {
+  double coefh = 1.0;  // smoothing length h = coefh sqrt(D) spacing (DualSPHysics; the study: h = sqrt(3) spacing)
+  double cfl = 0.2;    // dt = cfl min(sqrt(h / |a|max), h / (c0 + h max visc)) (DualSPHysics' step condition)
+  double density_diffusion = 0.1;  // delta of the Fourtakas et al. (2020) term; 0: none
+  SphViscosity viscosity = SphViscosity::kLaminarSps;
+  double artificial_alpha = 0.01;  // Monaghan's alpha, with viscosity "artificial"
 };
 
 struct Gauge {
@@ -178,6 +193,7 @@ struct Scene {
   double domain_wall_friction = 0.0;
   SolverSettings solver;
   FluidSettings fluid;
+  SphSettings sph;
   std::vector<WaterRegion> water;
   std::vector<Boundary> boundaries;
   Instruments instruments;
@@ -207,6 +223,7 @@ std::string scene_json_with_overrides(const std::string& file, const std::vector
 
 const char* to_string(BoundaryCondition c);
 const char* to_string(Precision p);
+const char* to_string(SolverMethod m);
 const char* to_string(ForcingModel m);
 
 }  // namespace flume

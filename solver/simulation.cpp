@@ -6,6 +6,7 @@
 namespace flume {
 
 std::unique_ptr<Simulation> make_cpu_simulation(const Scene& scene, const SimulationOptions& options);
+std::unique_ptr<Simulation> make_sph_simulation(const Scene& scene, const SimulationOptions& options);
 #ifdef FLUME_HAVE_CUDA
 std::unique_ptr<Simulation> make_cuda_simulation(const Scene& scene, const SimulationOptions& options);
 bool cuda_device_present();
@@ -52,6 +53,11 @@ bool cuda_available() {
 }
 
 std::unique_ptr<Simulation> make_simulation(const Scene& scene, const SimulationOptions& options) {
+  if (scene.solver.method == SolverMethod::kSph) {
+    if (options.backend == Backend::kCuda)
+      throw InputError("--backend", "cuda", "SPH runs on the CPU only yet (solver.method sph): run with --backend cpu");
+    return make_sph_simulation(scene, options);
+  }
   if (options.backend == Backend::kCuda) {
     if (scene.debris.present)
       throw InputError(scene.file, "debris",

@@ -81,6 +81,8 @@ class Simulation {
   virtual size_t grid_bytes() const = 0;
   virtual size_t active_blocks() const = 0;
   virtual size_t particle_bytes() const = 0;
+  // Particle pairs within the kernel's support summed over every force evaluation so far (SPH; 0 for MPM).
+  virtual long neighbour_interactions() const { return 0; }
   // Linear and angular momentum (about the origin), for conservation checks: 3 components each.
   virtual void momentum(double linear[3], double angular[3]) const = 0;
   // Sets particle velocities to v(x) = v0 + omega x (x - centre) (3D; in 2D omega is about the out-of-plane

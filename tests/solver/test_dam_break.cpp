@@ -1,6 +1,5 @@
-// Martin & Moyce (1952), n^2 = 2: the surge front of a collapsing water column (issue 2, item 2).
-// The front Z = z/a against T = t sqrt(2g/a) is compared with Table 2 after one time shift (the
-// experiment's gate opened with a lag), and the front must converge as dx is refined.
+// Martin & Moyce (1952), n^2 = 2: the surge front of a collapsing water column (issue 2, item 2), compared
+// with Table 2 (martin_moyce.h); the front must converge as dx is refined.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -10,72 +9,27 @@
 #include "common/plot/figure.h"
 #include "solver/scene.h"
 #include "solver/simulation.h"
+#include "martin_moyce.h"
 #include "test_util.h"
 
 namespace flume {
 namespace {
 
-constexpr double kA = 0.05715;  // column width a (m); height 2a
-constexpr double kG = 9.80665;
-
-struct FrontCurve {
-  std::vector<double> T, Z;
-  double at(double t) const {
-    if (t <= T.front()) return Z.front();
-    auto it = std::lower_bound(T.begin(), T.end(), t);
-    if (it == T.end()) return Z.back();
-    const size_t i = it - T.begin();
-    const double s = (t - T[i - 1]) / (T[i] - T[i - 1]);
-    return Z[i - 1] + s * (Z[i] - Z[i - 1]);
-  }
-};
+using test::FrontCurve;
+using test::Fit;
+using test::fit_shift;
+constexpr double kA = test::kMmA;
 
 // Runs the shipped scene at resolution dx and records the front (the leading particle's edge) over time.
 FrontCurve simulate_front(double dx) {
   const Scene scene = load_scene(std::string(FLUME_SOURCE_DIR) + "/scenes/dam_break/martin_moyce_2d.json",
                                  {{"solver.dx", std::to_string(dx)}, {"instruments.snapshot_rate_hz", "0"}});
   auto sim = make_simulation(scene, {});
-  const double t_scale = std::sqrt(2 * kG / kA);
   FrontCurve c;
-  std::vector<double> xyz;
-  const double h = dx / 2;  // ppc 4: two particles per cell per axis
-  RunStatus status = RunStatus::kRunning;
-  while (true) {
-    sim->particle_positions(xyz);
-    double front = 0;
-    for (size_t i = 0; i < sim->particle_count(); ++i) front = std::max(front, xyz[3 * i]);
-    c.T.push_back(sim->time() * t_scale);
-    c.Z.push_back((front + 0.5 * h) / kA);
-    if (status != RunStatus::kRunning) break;
-    status = sim->step();
-  }
+  const RunStatus status = test::record_front(*sim, dx / 2, c);  // ppc 4: two particles per cell per axis
   EXPECT_EQ(status, RunStatus::kOk) << sim->message();
-  EXPECT_NEAR(c.T.back(), scene.solver.end_time * t_scale, 1e-9);
+  EXPECT_NEAR(c.T.back(), scene.solver.end_time * std::sqrt(2 * test::kMmG / kA), 1e-9);
   return c;
-}
-
-struct Fit {
-  double rms, shift;
-};
-// Best single time shift dT in [lo, hi]: experiment at T compares with the simulation at T - dT.
-Fit fit_shift(const FrontCurve& sim, const std::vector<std::vector<double>>& data, double lo = -0.2,
-              double hi = 0.2) {
-  Fit best{1e300, 0};
-  const int n_shifts = static_cast<int>(std::lround((hi - lo) / 0.005));
-  for (int k = 0; k <= n_shifts; ++k) {
-    const double dT = lo + (hi - lo) * k / n_shifts;
-    double s = 0;
-    int n = 0;
-    for (const auto& r : data) {
-      if (r[0] < 0.4 || r[0] > 3.0) continue;
-      const double e = sim.at(r[0] - dT) - r[1];
-      s += e * e;
-      ++n;
-    }
-    const double rms = std::sqrt(s / n);
-    if (rms < best.rms) best = {rms, dT};
-  }
-  return best;
 }
 
 TEST(MartinMoyce, FrontMatchesTable2AndConverges) {
@@ -96,13 +50,8 @@ TEST(MartinMoyce, FrontMatchesTable2AndConverges) {
   EXPECT_LE(fine.rms, 0.15) << "front RMS error against Martin & Moyce Table 2";
   EXPECT_LE(std::fabs(fine.shift), 0.2);
   // Convergence: the difference between successive resolutions shrinks (sampled over 0.4 <= T <= 3).
-  auto diff = [&](const FrontCurve& a, const FrontCurve& b) {
-    double s = 0;
-    int n = 0;
-    for (double T = 0.4; T <= 3.0; T += 0.05, ++n) s += std::pow(a.at(T) - b.at(T), 2);
-    return std::sqrt(s / n);
-  };
-  const double d01 = diff(curves[0], curves[1]), d12 = diff(curves[1], curves[2]);
+  const double d01 = test::front_difference(curves[0], curves[1]);
+  const double d12 = test::front_difference(curves[1], curves[2]);
   std::printf("successive differences: |a/10 - a/20| = %.4f, |a/20 - a/40| = %.4f\n", d01, d12);
   EXPECT_LT(d12, d01);
 

@@ -1,0 +1,90 @@
+#include "solver/sph/boundary_particles.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+
+#include "common/errors.h"
+
+namespace flume::sph {
+
+namespace {
+// Solid at p: outside the domain box, or in (or on the face of) a boundary's solid. The owner is the first
+// boundary holding p, -1 for the domain's walls.
+bool solid_at(const Scene& s, const Vec3d& p, double tol, int& owner) {
+  for (std::size_t b = 0; b < s.boundaries.size(); ++b)
+    if (shape_distance(s.boundaries[b].shape, p, s.dimension) <= tol) {
+      owner = static_cast<int>(b);
+      return true;
+    }
+  owner = -1;
+  for (int d = 0; d < s.dimension; ++d)
+    if (p[d] < s.domain_lo[d] || p[d] > s.domain_hi[d]) return true;
+  return false;
+}
+}  // namespace
+
+WallParticles make_wall_particles(const Scene& scene, double spacing, int layers, double max_points) {
+  const int D = scene.dimension;
+  long k0[3] = {0, 0, 0}, n[3] = {1, 1, 1};
+  double total = 1;
+  for (int d = 0; d < D; ++d) {
+    k0[d] = static_cast<long>(std::floor(scene.domain_lo[d] / spacing - 0.5)) - layers - 1;
+    const long k1 = static_cast<long>(std::ceil(scene.domain_hi[d] / spacing - 0.5)) + layers + 1;
+    n[d] = k1 - k0[d] + 1;
+    total *= double(n[d]);
+  }
+  if (total > max_points)
+    throw InputError(scene.file, "solver.dx",
+                     "the SPH wall lattice over the domain would hold " + std::to_string(long(total)) +
+                         " points (allowed: at most " + std::to_string(long(max_points)) + "): use a larger dx");
+  const std::size_t count = static_cast<std::size_t>(total);
+  auto point = [&](std::size_t idx, long* k) {
+    Vec3d p{};
+    for (int d = 0; d < D; ++d) {
+      k[d] = static_cast<long>(idx % n[d]);
+      idx /= n[d];
+      p[d] = (k0[d] + k[d] + 0.5) * spacing;
+    }
+    return p;
+  };
+  // near[i]: an open point within `layers` steps on every axis (a box dilation of the open set, axis by axis).
+  std::vector<uint8_t> near(count);
+  const double tol = 1e-9 * spacing;
+#pragma omp parallel for schedule(static)
+  for (long i = 0; i < long(count); ++i) {
+    long k[3];
+    const Vec3d p = point(i, k);
+    int o;
+    const bool solid = solid_at(scene, p, tol, o);
+    near[i] = solid ? 0 : 1;
+  }
+  long stride = 1;
+  std::vector<uint8_t> tmp(count);
+  for (int d = 0; d < D; ++d) {
+#pragma omp parallel for schedule(static)
+    for (long i = 0; i < long(count); ++i) {
+      const long ki = (i / stride) % n[d];
+      uint8_t v = 0;
+      for (long s = std::max(0L, ki - layers); s <= std::min(n[d] - 1, ki + layers) && !v; ++s)
+        v = near[i + (s - ki) * stride];
+      tmp[i] = v;
+    }
+    near.swap(tmp);
+    stride *= n[d];
+  }
+  WallParticles w;
+  for (std::size_t i = 0; i < count; ++i) {
+    if (!near[i]) continue;
+    long k[3];
+    const Vec3d p = point(i, k);
+    int o;
+    if (!solid_at(scene, p, tol, o)) continue;
+    for (int d = 0; d < 3; ++d) w.x[d].push_back(p[d]);
+    w.wall.push_back(o);
+    for (int d = 0; d < 3; ++d) w.velocity.push_back(o >= 0 ? scene.boundaries[o].velocity[d] : 0.0);
+  }
+  return w;
+}
+
+}  // namespace flume::sph

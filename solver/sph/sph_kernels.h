@@ -1,0 +1,185 @@
+// The weakly compressible SPH physics of one particle pair and one particle, as DualSPHysics runs it in the
+// comparative study (Bonus et al., section 4.2): small inline functions for the host and a CUDA device alike, so
+// the OpenMP loops of sph_solver.cpp and a future CUDA kernel share one definition. Notation: r_ab = x_a - x_b,
+// v_ab = v_a - v_b; the kernel gradient is grad_a W_ab = F(r) r_ab with F < 0 (wendland_gradient_factor).
+#pragma once
+#include <cmath>
+
+#if defined(__CUDACC__)
+#define FLUME_HD __host__ __device__ __forceinline__
+#else
+#define FLUME_HD inline __attribute__((always_inline))
+#endif
+
+namespace flume::sph {
+
+// Symmetric D x D tensors stored as their D(D+1)/2 upper entries, row by row (2D: xx, xz, zz).
+template <int D>
+struct Sym {
+  static constexpr int kSize = D * (D + 1) / 2;
+  FLUME_HD static constexpr int at(int i, int j) {
+    return i <= j ? i * D - i * (i - 1) / 2 + (j - i) : j * D - j * (j - 1) / 2 + (i - j);
+  }
+};
+
+// Everything a pair interaction reads, in the solver's precision.
+template <typename T>
+struct Params {
+  T h = 0, inv_h = 0;
+  T support2 = 0;     // (2h)^2
+  T eta2 = 0;         // 0.01 h^2, keeps 1/r^2 finite
+  T grad_coef = 0;    // -5 alpha_D / h^2: F(q) = grad_coef (1 - q/2)^3
+  T rho0 = 0, B = 0, gamma = 0, c0 = 0;
+  T nu = 0;           // laminar kinematic viscosity (m^2/s)
+  T alpha = 0;        // artificial viscosity coefficient; 0: laminar + SPS instead
+  T ddt = 0;          // delta h c0 of the density diffusion term (Fourtakas et al. 2020)
+  T g[3] = {0, 0, 0};
+  T sps_cs2 = 0;      // (C_s Delta)^2, Smagorinsky (study eq. 12; C_s = 0.12)
+  T sps_ci = 0;       // 2/3 C_I Delta^2 (study eq. 11; C_I = 0.0066)
+};
+
+// Wendland C2 (quintic) kernel, study eq. 6: W = alpha_D (1 - q/2)^4 (2q + 1), 0 <= q <= 2, with
+// alpha_D = 7 / (4 pi h^2) in 2D and 21 / (16 pi h^3) in 3D (Wendland 1995).
+template <int D>
+inline double wendland_alpha(double h) {
+  constexpr double kPi = 3.14159265358979323846;
+  return D == 2 ? 7.0 / (4.0 * kPi * h * h) : 21.0 / (16.0 * kPi * h * h * h);
+}
+template <typename T>
+FLUME_HD T wendland_w(T q, T alpha) {
+  const T u = T(1) - T(0.5) * q;
+  return q < T(2) ? alpha * u * u * u * u * (T(2) * q + T(1)) : T(0);
+}
+// dW/dr / r = -5 alpha_D q (1 - q/2)^3 / (h r) = -5 alpha_D (1 - q/2)^3 / h^2, for r^2 < (2h)^2.
+template <typename T>
+FLUME_HD T wendland_gradient_factor(T r2, const Params<T>& P) {
+  const T u = T(1) - T(0.5) * std::sqrt(r2) * P.inv_h;
+  return P.grad_coef * u * u * u;
+}
+
+// Tait equation of state, study eq. 13: p = B ((rho / rho0)^gamma - 1), B = c0^2 rho0 / gamma; with
+// c0 = sqrt(K / rho0) it is MPM's Tait law p = K / gamma (J^-gamma - 1) for rho / rho0 = 1 / J.
+template <typename T>
+FLUME_HD T tait_pressure(T rho, const Params<T>& P) {
+  return P.B * (std::pow(rho / P.rho0, P.gamma) - T(1));
+}
+// The elastic energy per unit mass stored by the Tait law, int_rho0^rho p / rho^2 drho (for the energy audit).
+inline double tait_energy_per_mass(double rho, double rho0, double B, double gamma) {
+  const double r = rho / rho0;
+  return B / rho0 * ((std::pow(r, gamma - 1) - 1) / (gamma - 1) + 1 / r - 1);
+}
+
+// What one particle collects from its neighbours in one force evaluation.
+template <int D, typename T>
+struct Accum {
+  T acc[D] = {};
+  T drho = 0;
+  T gradv[D * D] = {};  // velocity gradient dv_i/dx_j, for the sub-particle stress
+  T visc_dt = 0;        // max_b |v_ab . r_ab| / (r^2 + eta^2), DualSPHysics' viscous step limit
+  int pairs = 0;
+};
+
+// The terms every pair shares: continuity (study eq. 7, rho_a sum_b m_b / rho_b v_ab . grad W), the symmetric
+// pressure gradient (eq. 9: -sum_b m_b (p_a + p_b) / (rho_a rho_b) grad W) and the viscosity: laminar (Lo & Shao
+// 2002, eq. 9's second term) or Monaghan's artificial viscosity when alpha > 0. v_ab uses a wall particle's
+// prescribed velocity.
+template <int D, typename T>
+FLUME_HD void pair_common(const Params<T>& P, const T* rab, T r2, T F, const T* vab, T rho_a, T p_a, T rho_b, T p_b,
+                          T m_b, Accum<D, T>& A) {
+  T dot = 0;
+  for (int d = 0; d < D; ++d) dot += vab[d] * rab[d];
+  A.drho += m_b * F * dot * (rho_a / rho_b);
+  const T inv_r2 = T(1) / (r2 + P.eta2);
+  const T vdt = std::fabs(dot) * inv_r2;
+  A.visc_dt = vdt > A.visc_dt ? vdt : A.visc_dt;
+  T press = -m_b * (p_a + p_b) / (rho_a * rho_b) * F;
+  if (P.alpha > T(0)) {
+    if (dot < T(0)) {  // approaching pairs only (Monaghan 1992): Pi_ab = -alpha c0 mu / rho_mean
+      const T mu = P.h * dot * inv_r2;
+      press -= m_b * (-P.alpha * P.c0 * mu / (T(0.5) * (rho_a + rho_b))) * F;
+    }
+    for (int d = 0; d < D; ++d) A.acc[d] += press * rab[d];
+  } else {
+    const T lam = m_b * T(4) * P.nu * F * r2 * inv_r2 / (rho_a + rho_b);
+    for (int d = 0; d < D; ++d) A.acc[d] += press * rab[d] + lam * vab[d];
+  }
+  ++A.pairs;
+}
+
+// d rho / d p at a particle, rho / c^2 with the Tait law's local sound speed c^2 = gamma (p + B) / rho: the
+// hydrostatic density difference across r_ab is this times g . r_ab.
+template <typename T>
+FLUME_HD T hydrostatic_density_slope(T rho, T p, const Params<T>& P) {
+  return rho * rho / (P.gamma * (p + P.B));
+}
+
+// Fluid-fluid extras: density diffusion (Fourtakas et al. 2020, delta-SPH on the dynamic density: the
+// hydrostatic part k_a g . r_ab, k_a = hydrostatic_density_slope, is taken out so a still column does not diffuse;
+// with rho0 / c0^2 in place of the local k_a, as in the paper's linearised form, the column settled with a pressure
+// gradient 3 % steeper than rho g at 1 % compression, the Tait law's c^2 being 6 % higher at the bottom), the
+// sub-particle stress (eq. 9's third term, tau / rho^2 held per particle, Dalrymple & Rogers 2006) and the
+// velocity gradient it is computed from next.
+template <int D, typename T>
+FLUME_HD void pair_fluid_extras(const Params<T>& P, const T* rab, T r2, T F, const T* vab, T rho_a, T k_a, T rho_b,
+                                T m_b, const T* tau_a, const T* tau_b, Accum<D, T>& A) {
+  T g_dot_r = 0;
+  for (int d = 0; d < D; ++d) g_dot_r += P.g[d] * rab[d];
+  const T drho_dyn = (rho_a - rho_b) - k_a * g_dot_r;
+  const T V_b = m_b / rho_b;
+  A.drho += P.ddt * T(2) * drho_dyn * F * r2 / (r2 + P.eta2) * V_b;
+  if (P.alpha > T(0)) return;
+  for (int i = 0; i < D; ++i) {
+    T s = 0;
+    for (int j = 0; j < D; ++j) {
+      const int k = Sym<D>::at(i, j);
+      s += (tau_a[k] + tau_b[k]) * rab[j];
+      A.gradv[i * D + j] -= V_b * vab[i] * F * rab[j];  // grad v = sum_b V_b (v_b - v_a) (x) grad_a W
+    }
+    A.acc[i] += m_b * F * s;
+  }
+}
+
+// The sub-particle stress over rho^2 from the velocity gradient (study eqs. 11-12, DualSPHysics' SpsTau):
+// tau / rho = nu_t (2 S - 2/3 tr S I) - 2/3 C_I Delta^2 |S|^2 I, nu_t = (C_s Delta)^2 |S|, |S| = sqrt(2 S:S).
+template <int D, typename T>
+FLUME_HD void sps_stress(const Params<T>& P, const T* gradv, T rho, T* tau) {
+  T S[D * D], ss = 0, tr = 0;
+  for (int i = 0; i < D; ++i)
+    for (int j = 0; j < D; ++j) {
+      S[i * D + j] = T(0.5) * (gradv[i * D + j] + gradv[j * D + i]);
+      ss += S[i * D + j] * S[i * D + j];
+    }
+  for (int i = 0; i < D; ++i) tr += S[i * D + i];
+  const T s2 = T(2) * ss, mag = std::sqrt(s2);
+  const T nut = P.sps_cs2 * mag;
+  const T inv_rho = T(1) / rho;
+  for (int i = 0; i < D; ++i)
+    for (int j = i; j < D; ++j) {
+      T t = nut * T(2) * S[i * D + j];
+      if (i == j) t -= nut * T(2) / T(3) * tr + P.sps_ci * s2;
+      tau[Sym<D>::at(i, j)] = t * inv_rho;
+    }
+}
+
+// Symplectic position-Verlet stages (DualSPHysics' Symplectic, Monaghan 2005). Predictor to t + dt/2:
+template <typename T>
+FLUME_HD void predict(T x, T v, T a, T dt, T& xh, T& vh) {
+  xh = x + T(0.5) * dt * v;
+  vh = v + T(0.5) * dt * a;
+}
+// Corrector from t to t + dt with the mid-step acceleration: v1 = v0 + dt a, x1 = x0 + dt (v0 + v1) / 2.
+template <typename T>
+FLUME_HD void correct(T& x, T& v, T a, T dt) {
+  const T v1 = v + dt * a;
+  x += T(0.5) * dt * (v + v1);
+  v = v1;
+}
+// Density: rho1 = rho0 (2 - eps) / (2 + eps), eps = -drho_half / rho_half dt (exact for a constant rate of the
+// logarithm of the density, as DualSPHysics integrates it).
+template <typename T>
+FLUME_HD T correct_density(T rho, T rho_half, T drho_half, T dt) {
+  const T eps = -drho_half / rho_half * dt;
+  return rho * (T(2) - eps) / (T(2) + eps);
+}
+
+}  // namespace flume::sph

@@ -1,0 +1,616 @@
+// Weakly compressible SPH on the CPU (OpenMP), the second method beside MPM (docs/sph.md): DualSPHysics'
+// formulation as the comparative study ran it (section 4.2). The physics is in sph_kernels.h; this file holds the
+// particle arrays, the neighbour search (cell_list.h), the symplectic step and the plumbing to the instruments.
+//
+// Fluid particles are stored as structure-of-arrays and re-sorted by cell at the start of every step; the wall
+// particles (dynamic boundary particles: fixed, their density evolved by continuity and floored at rho0) are sorted
+// once. Each loop body reads its neighbours and writes only its own particle: race-free without atomics, and the
+// result does not depend on the number of threads.
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+#include "common/errors.h"
+#include "solver/instruments.h"
+#include "solver/seeding.h"
+#include "solver/simulation.h"
+#include "solver/sph/boundary_particles.h"
+#include "solver/sph/cell_list.h"
+#include "solver/sph/sph_kernels.h"
+#include "solver/sph/sph_launch.h"
+
+namespace flume {
+namespace {
+
+using sph::Accum;
+using sph::Sym;
+
+// Particles are sorted into cells at the start of a step and drift at most kDriftOverH h from there within it (the
+// step is bounded so): the search reaches 2h plus that from a particle's present position to its neighbours' cells.
+constexpr double kCellOverH = 1.0;
+constexpr double kDriftOverH = 0.05;
+
+template <int D, typename T>
+class SphSolver final : public Simulation {
+  static constexpr int kS = Sym<D>::kSize;
+
+ public:
+  SphSolver(const Scene& scene, const SimulationOptions& options) : scene_(scene), instruments_(scene_) {
+    if (options.threads > 0) omp_set_num_threads(options.threads);
+    refuse_unsupported();
+    const int per_axis = static_cast<int>(std::lround(std::pow(scene.solver.ppc, 1.0 / D)));
+    spacing_ = scene.solver.dx / per_axis;
+    setup_params();
+    seed_fluid();
+    seed_walls();
+    const Energy e = energy();
+    energy0_ = e.total();
+    // Slack of the energy audit, as MPM's: SPH with viscosity and density diffusion dissipates, so the total may
+    // grow only by round-off and the settling of the walls; 1 % of the energy of lifting the water by its own
+    // height bounds that, and a blow-up grows past it within a few steps.
+    double zmin = 1e300, zmax = -1e300;
+    for (const auto& w : scene.water) {
+      zmin = std::min(zmin, w.lo[D - 1]);
+      zmax = std::max(zmax, w.hi[D - 1]);
+    }
+    energy_slack_ = 0.01 * std::max({e.kinetic, mass_total_ * g_norm_ * (zmax - zmin), 1e-12});
+    last_energy_ = e;
+    instruments_.sample(*this, 0.0, 0.0, true);
+  }
+
+  RunStatus step() override {
+    if (status_ != RunStatus::kRunning) return status_;
+    if (!sort_fluid()) return status_;
+    // The accelerations at t (the predictor's), then the step they allow.
+    evaluate(x_, v_, rho_, rhow_, time_);
+    double dt = step_size();
+    const double remaining = scene_.solver.end_time - time_;
+    if (dt >= remaining) dt = remaining;
+    if (!(dt > 0)) {
+      status_ = RunStatus::kOk;
+      return status_;
+    }
+    const T h = T(0.5 * dt);
+    // Predictor to t + dt/2.
+    sph::parallel_for(n_, [&](size_t i) {
+      for (int d = 0; d < D; ++d) sph::predict(x_[d][i], v_[d][i], a_[d][i], T(dt), xh_[d][i], vh_[d][i]);
+      rhoh_[i] = rho_[i] + h * drho_[i];
+    });
+    sph::parallel_for(nw_, [&](size_t k) { rhowh_[k] = std::max(T(P_.rho0), rhow_[k] + h * drhow_[k]); });
+    evaluate(xh_, vh_, rhoh_, rhowh_, time_ + 0.5 * dt);
+    // Corrector to t + dt with the mid-step rates; the hold's work on the water is energy supplied.
+    const double lift = hold_lift(time_ + 0.5 * dt);
+    double hold_work = 0;
+    if (!held_.empty()) {
+#pragma omp parallel for reduction(+ : hold_work) schedule(static)
+      for (long i = 0; i < long(n_); ++i) hold_work += double(held_[i] * mass_[i]) * lift * double(vh_[D - 1][i]) * dt;
+    }
+    energy0_ += hold_work;
+    sph::parallel_for(n_, [&](size_t i) {
+      for (int d = 0; d < D; ++d) sph::correct(x_[d][i], v_[d][i], a_[d][i], T(dt));
+      rho_[i] = sph::correct_density(rho_[i], rhoh_[i], drho_[i], T(dt));
+    });
+    sph::parallel_for(nw_, [&](size_t k) {
+      rhow_[k] = std::max(T(P_.rho0), sph::correct_density(rhow_[k], rhowh_[k], drhow_[k], T(dt)));
+    });
+    add_wall_impulses(dt);
+    time_ += dt;
+    dt_ = dt;
+    ++steps_;
+    audit(dt);
+    if (status_ == RunStatus::kUnstable) {
+      instruments_.sample(*this, time_, dt, true);
+      return status_;
+    }
+    instruments_.add_impulses(load_impulse_, dt);
+    std::fill(load_impulse_.begin(), load_impulse_.end(), 0.0);
+    instruments_.sample(*this, time_, dt, false);
+    if (time_ >= scene_.solver.end_time - 1e-12) status_ = RunStatus::kOk;
+    return status_;
+  }
+
+  double time() const override { return time_; }
+  double last_dt() const override { return dt_; }
+  long steps() const override { return steps_; }
+  size_t particle_count() const override { return n_; }
+  double total_mass() const override { return mass_total_; }
+  const Record& record() const override { return instruments_.record(); }
+  const std::string& message() const override { return message_; }
+  long neighbour_interactions() const override { return interactions_; }
+
+  void particle_positions(std::vector<double>& xyz) const override {
+    xyz.assign(3 * n_, 0.0);
+    for (size_t i = 0; i < n_; ++i)
+      for (int d = 0; d < D; ++d) xyz[3 * i + d] = x_[d][i];
+  }
+  void particle_velocities(std::vector<double>& vel) const override {
+    vel.assign(3 * n_, 0.0);
+    for (size_t i = 0; i < n_; ++i)
+      for (int d = 0; d < D; ++d) vel[3 * i + d] = v_[d][i];
+  }
+  void particle_pressures(std::vector<double>& p) const override {
+    p.resize(n_);
+    for (size_t i = 0; i < n_; ++i) p[i] = sph::tait_pressure(double(rho_[i]), Pd_);
+  }
+  size_t grid_bytes() const override {
+    return (fluid_list_.start.capacity() + wall_list_.start.capacity()) * sizeof(uint32_t);
+  }
+  size_t active_blocks() const override { return grid_.count; }
+  size_t particle_bytes() const override {
+    return n_ * sizeof(T) * (5 * D + 5 + 2 * kS) + nw_ * sizeof(T) * (2 * D + 5);
+  }
+
+  void momentum(double linear[3], double angular[3]) const override {
+    double L[3] = {0, 0, 0}, A[3] = {0, 0, 0};
+    for (size_t i = 0; i < n_; ++i) {
+      double x[3] = {0, 0, 0}, v[3] = {0, 0, 0};
+      for (int d = 0; d < D; ++d) {
+        x[d] = x_[d][i];
+        v[d] = v_[d][i];
+      }
+      const double m = mass_[i];
+      for (int d = 0; d < 3; ++d) L[d] += m * v[d];
+      if constexpr (D == 3) {
+        A[0] += m * (x[1] * v[2] - x[2] * v[1]);
+        A[1] += m * (x[2] * v[0] - x[0] * v[2]);
+      }
+      A[2] += m * (x[0] * v[1] - x[1] * v[0]);
+    }
+    for (int d = 0; d < 3; ++d) {
+      linear[d] = L[d];
+      angular[d] = A[d];
+    }
+  }
+
+  void set_rigid_velocity(const double v0[3], const double omega[3], const double centre[3]) override {
+    for (size_t i = 0; i < n_; ++i) {
+      double r[3] = {0, 0, 0};
+      for (int d = 0; d < D; ++d) r[d] = x_[d][i] - centre[d];
+      if constexpr (D == 3) {
+        v_[0][i] = T(v0[0] + omega[1] * r[2] - omega[2] * r[1]);
+        v_[1][i] = T(v0[1] + omega[2] * r[0] - omega[0] * r[2]);
+        v_[2][i] = T(v0[2] + omega[0] * r[1] - omega[1] * r[0]);
+      } else {
+        v_[0][i] = T(v0[0] - omega[2] * r[1]);
+        v_[1][i] = T(v0[1] + omega[2] * r[0]);
+      }
+    }
+    update_max_speed();
+    const Energy e = energy();
+    energy0_ = e.total();
+    energy_slack_ = std::max(energy_slack_, 0.01 * e.kinetic);
+  }
+
+  // --- read access for the instruments ---
+  int dim() const { return D; }
+  size_t n() const { return n_; }
+  T x(int d, size_t i) const { return x_[d][i]; }
+  T v(int d, size_t i) const { return v_[d][i]; }
+  T volume(size_t i) const { return vol_[i]; }  // reference volume: the particle's mass over rho0
+  double max_speed() const { return max_speed_; }
+
+  struct Energy {
+    double kinetic = 0, potential = 0, elastic = 0;
+    double total() const { return kinetic + potential + elastic; }
+  };
+  Energy energy() const {
+    double ke = 0, pe = 0, el = 0;
+#pragma omp parallel for reduction(+ : ke, pe, el) schedule(static)
+    for (long i = 0; i < long(n_); ++i) {
+      double v2 = 0, gx = 0;
+      for (int d = 0; d < D; ++d) {
+        v2 += double(v_[d][i]) * v_[d][i];
+        gx += scene_.solver.gravity[d] * x_[d][i];
+      }
+      const double m = mass_[i];
+      ke += 0.5 * m * v2;
+      pe -= m * gx;
+      el += m * sph::tait_energy_per_mass(rho_[i], Pd_.rho0, Pd_.B, Pd_.gamma);
+    }
+    return {ke, pe, el};
+  }
+  const Energy& last_energy() const { return last_energy_; }
+
+ private:
+  void refuse_unsupported() const {
+    const std::string why = " (solver.method sph; docs/sph.md lists what SPH does not do yet)";
+    if (scene_.debris.present) throw InputError(scene_.file, "debris", "SPH does not couple debris yet" + why);
+    if (scene_.inflow.present) throw InputError(scene_.file, "inflow", "SPH has no inflow boundary yet" + why);
+    for (const auto& b : scene_.boundaries)
+      if (b.condition == BoundaryCondition::kSymmetry)
+        throw InputError(scene_.file, "boundaries." + b.name + ".condition",
+                         "SPH has no symmetry plane yet: model the full span" + why);
+  }
+
+  void setup_params() {
+    const auto& f = scene_.fluid;
+    const auto& s = scene_.sph;
+    h_ = s.coefh * std::sqrt(double(D)) * spacing_;
+    search_ = (2 + kDriftOverH) * h_;
+    const double c0 = std::sqrt(f.bulk_modulus / f.density);  // as MPM's sound speed
+    Pd_.h = h_;
+    Pd_.inv_h = 1 / h_;
+    Pd_.support2 = 4 * h_ * h_;
+    Pd_.eta2 = 0.01 * h_ * h_;
+    Pd_.grad_coef = -5 * sph::wendland_alpha<D>(h_) / (h_ * h_);
+    Pd_.rho0 = f.density;
+    Pd_.gamma = f.gamma;
+    Pd_.c0 = c0;
+    Pd_.B = c0 * c0 * f.density / f.gamma;
+    Pd_.nu = f.viscosity / f.density;
+    Pd_.alpha = s.viscosity == SphViscosity::kArtificial ? s.artificial_alpha : 0.0;
+    // alpha = 0 selects laminar + SPS in the pair terms; an artificial viscosity of exactly 0 means none at all.
+    artificial_ = s.viscosity == SphViscosity::kArtificial;
+    if (artificial_ && Pd_.alpha == 0) Pd_.nu = 0;
+    Pd_.ddt = s.density_diffusion * h_ * c0;
+    for (int d = 0; d < D; ++d) Pd_.g[d] = scene_.solver.gravity[d];
+    const double delta = spacing_;  // the study's Delta l: the particle spacing
+    Pd_.sps_cs2 = (0.12 * delta) * (0.12 * delta);
+    Pd_.sps_ci = 2.0 / 3.0 * 0.0066 * delta * delta;
+    P_.h = T(Pd_.h);
+    P_.inv_h = T(Pd_.inv_h);
+    P_.support2 = T(Pd_.support2);
+    P_.eta2 = T(Pd_.eta2);
+    P_.grad_coef = T(Pd_.grad_coef);
+    P_.rho0 = T(Pd_.rho0);
+    P_.B = T(Pd_.B);
+    P_.gamma = T(Pd_.gamma);
+    P_.c0 = T(Pd_.c0);
+    P_.nu = T(Pd_.nu);
+    P_.alpha = T(Pd_.alpha);
+    P_.ddt = T(Pd_.ddt);
+    for (int d = 0; d < 3; ++d) P_.g[d] = T(Pd_.g[d]);
+    P_.sps_cs2 = T(Pd_.sps_cs2);
+    P_.sps_ci = T(Pd_.sps_ci);
+    g_norm_ = 0;
+    for (int d = 0; d < D; ++d) g_norm_ += scene_.solver.gravity[d] * scene_.solver.gravity[d];
+    g_norm_ = std::sqrt(g_norm_);
+  }
+
+  void seed_fluid() {
+    const Seeds seeds = seed_water<D>(scene_, spacing_);
+    n_ = seeds.size();
+    if (n_ == 0) throw InputError(scene_.file, "water", "no water to simulate");
+    if (n_ > std::numeric_limits<uint32_t>::max() / 2)
+      throw InputError(scene_.file, "solver.dx", "too many particles for SPH's 32-bit indices: use a larger dx");
+    const double rho0 = scene_.fluid.density;
+    for (int d = 0; d < D; ++d) {
+      x_[d].assign(seeds.x[d].begin(), seeds.x[d].end());
+      v_[d].assign(n_, T(0));
+      xh_[d].resize(n_);
+      vh_[d].resize(n_);
+      a_[d].resize(n_);
+    }
+    rho_.resize(n_);
+    mass_.resize(n_);
+    vol_.resize(n_);
+    for (size_t i = 0; i < n_; ++i) {
+      rho_[i] = T(rho0 / (1 + seeds.strain[i]));  // rho / rho0 = 1 / J
+      vol_[i] = T(seeds.volume[i]);
+      mass_[i] = T(rho0 * seeds.volume[i]);
+    }
+    mass_total_ = water_mass(vol_, rho0);
+    if (seeds.any_held) held_.assign(seeds.held.begin(), seeds.held.end());
+    rhoh_.resize(n_);
+    drho_.resize(n_);
+    pf_.resize(n_);
+    visc_dt_.resize(n_);
+    pairs_.resize(n_);
+    for (int k = 0; k < kS; ++k) {
+      tau_[k].assign(n_, T(0));
+      tau_next_[k].assign(n_, T(0));
+    }
+  }
+
+  void seed_walls() {
+    const int layers = static_cast<int>(std::ceil(2 * h_ / spacing_));
+    sph::WallParticles w = sph::make_wall_particles(scene_, spacing_, layers);
+    double lo[D], hi[D];
+    for (int d = 0; d < D; ++d) {
+      lo[d] = scene_.domain_lo[d] - (layers + 2) * spacing_;
+      hi[d] = scene_.domain_hi[d] + (layers + 2) * spacing_;
+    }
+    if (!grid_.init(lo, hi, kCellOverH * h_, size_t(1) << 31))
+      throw InputError(scene_.file, "solver.dx", "the SPH cell grid over the domain would exceed 2^31 cells: use a larger dx");
+    nw_ = w.size();
+    // Sorted by cell once: the walls do not move.
+    wall_list_.cell.resize(nw_);
+    for (size_t k = 0; k < nw_; ++k) {
+      T p[D];
+      int c[D];
+      for (int d = 0; d < D; ++d) p[d] = T(w.x[d][k]);
+      if (!grid_.cell_of(p, c)) throw InputError(scene_.file, "domain", "a wall particle lies outside the SPH grid");
+      wall_list_.cell[k] = static_cast<uint32_t>(grid_.index(c));
+    }
+    wall_list_.build(grid_.count);
+    for (int d = 0; d < D; ++d) {
+      xw_[d].resize(nw_);
+      vw_[d].resize(nw_);
+    }
+    wall_id_.resize(nw_);
+    for (size_t s = 0; s < nw_; ++s) {
+      const size_t k = wall_list_.order[s];
+      for (int d = 0; d < D; ++d) {
+        xw_[d][s] = T(w.x[d][k]);
+        vw_[d][s] = T(w.velocity[3 * k + d]);
+      }
+      wall_id_[s] = w.wall[k];
+    }
+    std::vector<uint32_t> cells(nw_);
+    for (size_t s = 0; s < nw_; ++s) cells[s] = wall_list_.cell[wall_list_.order[s]];
+    wall_list_.cell.swap(cells);
+    rhow_.assign(nw_, T(scene_.fluid.density));
+    rhowh_.assign(nw_, T(scene_.fluid.density));
+    drhow_.assign(nw_, T(0));
+    pw_.assign(nw_, T(0));
+    mw_ = T(scene_.fluid.density * std::pow(spacing_, D));
+    for (int d = 0; d < D; ++d) fw_[d].assign(nw_, T(0));
+    load_impulse_.assign(scene_.boundaries.size() * D, 0.0);
+  }
+
+  // Orders the fluid particles by cell. False (and unstable) when one has left the domain.
+  bool sort_fluid() {
+    auto& cell = fluid_list_.cell;
+    cell.resize(n_);
+    long outside = -1;
+#pragma omp parallel for schedule(static) reduction(max : outside)
+    for (long i = 0; i < long(n_); ++i) {
+      T p[D];
+      int c[D];
+      bool in = true;
+      for (int d = 0; d < D; ++d) {
+        p[d] = x_[d][i];
+        in &= double(p[d]) >= scene_.domain_lo[d] && double(p[d]) <= scene_.domain_hi[d];
+      }
+      if (in && grid_.cell_of(p, c)) {
+        cell[i] = static_cast<uint32_t>(grid_.index(c));
+      } else {
+        cell[i] = 0;
+        outside = std::max(outside, i);
+      }
+    }
+    if (outside >= 0) {
+      std::ostringstream s;
+      s.precision(4);
+      s << "a particle left the domain at t = " << time_ << " s (step " << steps_ << "): at (";
+      for (int d = 0; d < D; ++d) s << (d ? ", " : "") << double(x_[d][outside]);
+      s << ") m";
+      fail(s.str());
+      return false;
+    }
+    fluid_list_.build(grid_.count);
+    if (!std::is_sorted(cell.begin(), cell.end())) {
+      const auto& order = fluid_list_.order;
+      auto permute = [&](std::vector<T>& a) {
+        scratch_.resize(n_);
+        sph::parallel_for(n_, [&](size_t i) { scratch_[i] = a[order[i]]; });
+        a.swap(scratch_);
+      };
+      for (int d = 0; d < D; ++d) {
+        permute(x_[d]);
+        permute(v_[d]);
+      }
+      permute(rho_);
+      permute(mass_);
+      permute(vol_);
+      if (!held_.empty()) permute(held_);
+      for (int k = 0; k < kS; ++k) permute(tau_[k]);
+      std::vector<uint32_t> sorted(n_);
+      sph::parallel_for(n_, [&](size_t i) { sorted[i] = cell[order[i]]; });
+      cell.swap(sorted);
+    }
+    return true;
+  }
+
+  double hold_lift(double t) const {
+    return held_.empty() ? 0.0 : scene_.basin.forcing.hold(t) * std::fabs(scene_.solver.gravity[D - 1]);
+  }
+
+  // The rates at one state: accelerations and density rates of the fluid, density rates and forces of the walls.
+  void evaluate(const std::vector<T>* X, const std::vector<T>* V, const std::vector<T>& R, const std::vector<T>& RW,
+                double t) {
+    const sph::Params<T> P = P_;
+    sph::parallel_for(n_, [&](size_t i) { pf_[i] = sph::tait_pressure(R[i], P); });
+    sph::parallel_for(nw_, [&](size_t k) { pw_[k] = sph::tait_pressure(RW[k], P); });
+    const T lift = T(hold_lift(t));
+    const bool sps = !artificial_;
+    sph::parallel_for(n_, [&](size_t a) {
+      T xa[D], va[D];
+      for (int d = 0; d < D; ++d) {
+        xa[d] = X[d][a];
+        va[d] = V[d][a];
+      }
+      const T rho_a = R[a], p_a = pf_[a], k_a = sph::hydrostatic_density_slope(rho_a, p_a, P);
+      T tau_a[kS];
+      for (int k = 0; k < kS; ++k) tau_a[k] = tau_[k][a];
+      Accum<D, T> A;
+      sph::for_each_neighbour_range<D>(grid_, fluid_list_, xa, search_, [&](uint32_t b0, uint32_t b1) {
+        for (uint32_t b = b0; b < b1; ++b) {
+          T rab[D], r2 = 0;
+          for (int d = 0; d < D; ++d) {
+            rab[d] = xa[d] - X[d][b];
+            r2 += rab[d] * rab[d];
+          }
+          if (r2 >= P.support2 || b == a) continue;
+          T vab[D], tau_b[kS];
+          for (int d = 0; d < D; ++d) vab[d] = va[d] - V[d][b];
+          const T F = sph::wendland_gradient_factor(r2, P);
+          sph::pair_common<D, T>(P, rab, r2, F, vab, rho_a, p_a, R[b], pf_[b], mass_[b], A);
+          for (int k = 0; k < kS; ++k) tau_b[k] = tau_[k][b];
+          sph::pair_fluid_extras<D, T>(P, rab, r2, F, vab, rho_a, k_a, R[b], mass_[b], tau_a, tau_b, A);
+        }
+      });
+      sph::for_each_neighbour_range<D>(grid_, wall_list_, xa, search_, [&](uint32_t b0, uint32_t b1) {
+        for (uint32_t b = b0; b < b1; ++b) {
+          T rab[D], r2 = 0;
+          for (int d = 0; d < D; ++d) {
+            rab[d] = xa[d] - xw_[d][b];
+            r2 += rab[d] * rab[d];
+          }
+          if (r2 >= P.support2) continue;
+          T vab[D];
+          for (int d = 0; d < D; ++d) vab[d] = va[d] - vw_[d][b];
+          const T F = sph::wendland_gradient_factor(r2, P);
+          sph::pair_common<D, T>(P, rab, r2, F, vab, rho_a, p_a, RW[b], pw_[b], mw_, A);
+        }
+      });
+      for (int d = 0; d < D; ++d) a_[d][a] = A.acc[d] + P.g[d];
+      if (!held_.empty()) a_[D - 1][a] += held_[a] * lift;  // the vacuum's hold: f(t) m |g| upward
+      drho_[a] = A.drho;
+      visc_dt_[a] = A.visc_dt;
+      pairs_[a] = A.pairs;
+      if (sps) {
+        T tau[kS];
+        sph::sps_stress<D, T>(P, A.gradv, rho_a, tau);
+        for (int k = 0; k < kS; ++k) tau_next_[k][a] = tau[k];
+      }
+    });
+    if (sps)
+      for (int k = 0; k < kS; ++k) tau_[k].swap(tau_next_[k]);
+    // Walls: density from the fluid around them (continuity only); the pair force on each, which is the
+    // opposite of what it exerts on the fluid (the pair terms are antisymmetric), for the load cells.
+    sph::parallel_for(nw_, [&](size_t k) {
+      T xk[D], vk[D];
+      for (int d = 0; d < D; ++d) {
+        xk[d] = xw_[d][k];
+        vk[d] = vw_[d][k];
+      }
+      const T rho_k = RW[k], p_k = pw_[k];
+      Accum<D, T> A;
+      sph::for_each_neighbour_range<D>(grid_, fluid_list_, xk, search_, [&](uint32_t b0, uint32_t b1) {
+        for (uint32_t b = b0; b < b1; ++b) {
+          T rab[D], r2 = 0;
+          for (int d = 0; d < D; ++d) {
+            rab[d] = xk[d] - X[d][b];
+            r2 += rab[d] * rab[d];
+          }
+          if (r2 >= P.support2) continue;
+          T vab[D];
+          for (int d = 0; d < D; ++d) vab[d] = vk[d] - V[d][b];
+          const T F = sph::wendland_gradient_factor(r2, P);
+          sph::pair_common<D, T>(P, rab, r2, F, vab, rho_k, p_k, R[b], pf_[b], mass_[b], A);
+        }
+      });
+      drhow_[k] = A.drho;
+      for (int d = 0; d < D; ++d) fw_[d][k] = mw_ * A.acc[d];
+    });
+    long pairs = 0;
+#pragma omp parallel for reduction(+ : pairs) schedule(static)
+    for (long i = 0; i < long(n_); ++i) pairs += pairs_[i];
+    interactions_ += pairs;
+  }
+
+  // DualSPHysics' step condition from the rates just evaluated, bounded by the scene's max_dt and by the
+  // cells' drift margin.
+  double step_size() {
+    const double amax = std::sqrt(sph::parallel_max<double>(n_, [&](size_t i) {
+      double s = 0;
+      for (int d = 0; d < D; ++d) s += double(a_[d][i]) * a_[d][i];
+      return s;
+    }));
+    const double vdt = sph::parallel_max<double>(n_, [&](size_t i) { return double(visc_dt_[i]); });
+    update_max_speed();
+    const double dt_f = amax > 0 ? std::sqrt(h_ / amax) : 1e300;
+    const double dt_cv = h_ / (Pd_.c0 + h_ * vdt);
+    double dt = scene_.sph.cfl * std::min(dt_f, dt_cv);
+    dt = std::min(dt, scene_.solver.max_dt);
+    if (max_speed_ > 0) dt = std::min(dt, kDriftOverH * h_ / max_speed_);
+    return dt;
+  }
+
+  void update_max_speed() {
+    max_speed_ = std::sqrt(sph::parallel_max<double>(n_, [&](size_t i) {
+      double s = 0;
+      for (int d = 0; d < D; ++d) s += double(v_[d][i]) * v_[d][i];
+      return s;
+    }));
+  }
+
+  void add_wall_impulses(double dt) {
+    if (scene_.instruments.loads.empty()) return;
+    for (size_t k = 0; k < nw_; ++k) {
+      if (wall_id_[k] < 0) continue;
+      for (int d = 0; d < D; ++d) load_impulse_[wall_id_[k] * D + d] += double(fw_[d][k]) * dt;
+    }
+  }
+
+  // NaN, or energy beyond what the start and the hold supplied: the step blew up.
+  void audit(double dt) {
+    bool finite = true;
+#pragma omp parallel for reduction(&& : finite) schedule(static)
+    for (long i = 0; i < long(n_); ++i) {
+      bool f = std::isfinite(double(rho_[i]));
+      for (int d = 0; d < D; ++d) f = f && std::isfinite(double(x_[d][i])) && std::isfinite(double(v_[d][i]));
+      finite = finite && f;
+    }
+    std::ostringstream s;
+    s.precision(4);
+    if (!finite) {
+      s << "NaN or Inf in the particles at t = " << time_ << " s (step " << steps_ << ", dt = " << dt << " s)";
+      fail(s.str());
+      return;
+    }
+    last_energy_ = energy();
+    const double e = last_energy_.total();
+    if (e > energy0_ + energy_slack_) {
+      s << "energy grew beyond what gravity and forcing supply at t = " << time_ << " s (step " << steps_
+        << "): total " << e << " J against " << energy0_ << " J initially (max speed " << max_speed_ << " m/s)";
+      fail(s.str());
+    }
+  }
+
+  void fail(const std::string& what) {
+    status_ = RunStatus::kUnstable;
+    message_ = what;
+  }
+
+  const Scene& scene_;
+  InstrumentSet<SphSolver> instruments_;
+  sph::Params<T> P_;
+  sph::Params<double> Pd_;
+  bool artificial_ = false;
+  double spacing_ = 0, h_ = 0, search_ = 0, g_norm_ = 0;
+  sph::CellGrid<D> grid_;
+  sph::CellList fluid_list_, wall_list_;
+
+  // Fluid: state at t, the predictor's state at t + dt/2, the rates of the last evaluation.
+  size_t n_ = 0;
+  std::vector<T> x_[D], v_[D], rho_, mass_, vol_, held_;
+  std::vector<T> xh_[D], vh_[D], rhoh_;
+  std::vector<T> a_[D], drho_, pf_, visc_dt_;
+  std::vector<int> pairs_;
+  std::vector<T> tau_[kS], tau_next_[kS];  // sub-particle stress over rho^2, from the previous evaluation
+  std::vector<T> scratch_;
+  double mass_total_ = 0;
+
+  // Walls: fixed positions and prescribed velocities, density at t and t + dt/2, its rate, pressure, pair force.
+  size_t nw_ = 0;
+  std::vector<T> xw_[D], vw_[D], rhow_, rhowh_, drhow_, pw_, fw_[D];
+  std::vector<int> wall_id_;
+  T mw_ = 0;
+  std::vector<double> load_impulse_;
+
+  double time_ = 0, dt_ = 0, max_speed_ = 0;
+  long steps_ = 0, interactions_ = 0;
+  double energy0_ = 0, energy_slack_ = 0;
+  Energy last_energy_;
+  RunStatus status_ = RunStatus::kRunning;
+  std::string message_;
+};
+
+}  // namespace
+
+std::unique_ptr<Simulation> make_sph_simulation(const Scene& scene, const SimulationOptions& options) {
+  const bool f = scene.solver.precision == Precision::kFloat;
+  if (scene.dimension == 2) {
+    if (f) return std::make_unique<SphSolver<2, float>>(scene, options);
+    return std::make_unique<SphSolver<2, double>>(scene, options);
+  }
+  if (f) return std::make_unique<SphSolver<3, float>>(scene, options);
+  return std::make_unique<SphSolver<3, double>>(scene, options);
+}
+
+}  // namespace flume
