@@ -8,6 +8,7 @@
 #include <thread>
 
 #include "campaigns/process.h"
+#include "campaigns/run_folders.h"
 #include "campaigns/spec.h"
 #include "common/errors.h"
 
@@ -18,13 +19,7 @@ namespace fs = std::filesystem;
 using json = nlohmann::json;
 
 std::string run_directory(const CalibrationSpec& spec, const std::string& db_file, std::int64_t index) {
-  fs::path base =
-      spec.run.output_dir.empty() ? fs::path(db_file + ".runs") / spec.name : fs::path(spec.run.output_dir);
-  std::error_code ec;
-  base = fs::absolute(base, ec);
-  char leaf[32];
-  std::snprintf(leaf, sizeof leaf, "run-%06lld", static_cast<long long>(index));
-  return (base / leaf).lexically_normal().string();
+  return campaigns::run_folder(campaigns::runs_base_folder(spec.run.output_dir, db_file, spec.name), index);
 }
 
 }  // namespace

@@ -2,8 +2,6 @@
 // job killed at any moment resumes from the store: finished runs stay finished, in-flight ones are redone.
 #include "campaigns/engine.h"
 
-#include <fcntl.h>
-#include <sys/file.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -17,6 +15,7 @@
 #include <thread>
 
 #include "campaigns/process.h"
+#include "campaigns/run_folders.h"
 #include "common/errors.h"
 #include "flume_version.h"
 
@@ -33,26 +32,6 @@ using Clock = std::chrono::steady_clock;
 
 std::atomic<int> g_stop_signal{0};
 extern "C" void on_stop_signal(int sig) { g_stop_signal = sig; }
-
-// One writer per store: an exclusive lock on "<db>.lock", which the kernel drops if the holder dies.
-class WriterLock {
- public:
-  explicit WriterLock(const std::string& db_file) {
-    const std::string file = db_file + ".lock";
-    fd_ = open(file.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
-    if (fd_ < 0) throw InputError(db_file, "", "cannot create the lock file " + file);
-    if (flock(fd_, LOCK_EX | LOCK_NB) != 0) {
-      close(fd_);
-      throw InputError(db_file, "",
-                       "another `flume campaign run` is writing this database (" + file + " is locked); wait for it "
-                       "or stop it");
-    }
-  }
-  ~WriterLock() { close(fd_); }
-
- private:
-  int fd_ = -1;
-};
 
 std::string hms(double s) {
   if (!(s >= 0) || s > 1e8) return "--:--";
@@ -213,17 +192,14 @@ std::vector<std::string> run_command(const CampaignSpec& spec, size_t index, con
 }
 
 std::string run_directory(const CampaignSpec& spec, const std::string& db_file, size_t index) {
-  fs::path base = spec.run.output_dir.empty() ? fs::path(db_file + ".runs") / spec.name : fs::path(spec.run.output_dir);
-  std::error_code ec;
-  base = fs::absolute(base, ec);
-  char leaf[32];
-  std::snprintf(leaf, sizeof leaf, "run-%06zu", index);
-  return (base / leaf).lexically_normal().string();
+  return run_folder(runs_base_folder(spec.run.output_dir, db_file, spec.name), static_cast<std::int64_t>(index));
 }
 
 int run_campaign(const CampaignSpec& spec, const EngineOptions& options, int mpi_size) {
-  WriterLock lock(options.db_file);
-  store::CampaignStore db(options.db_file);
+  store::CampaignStore db(options.db_file);  // the writer lock first: a refused job writes nothing anywhere
+  // Before a run is registered: a folder that cannot be written stops the job before it starts.
+  check_writable_folder(runs_base_folder(spec.run.output_dir, options.db_file, spec.name), spec.file,
+                        "run.output_dir");
   const auto planned = plan_runs(spec);
   std::int64_t campaign = 0;
   if (auto existing = db.find_campaign(spec.name)) {
