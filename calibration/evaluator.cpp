@@ -145,6 +145,11 @@ std::shared_ptr<const RunResult> Evaluator::execute(
   }
   std::lock_guard<std::mutex> lock(
       mutex_);  // also serialises the HDF5 reads (the library is not thread-safe)
+  if (outcome.interrupted) {  // stopped by SIGTERM/SIGINT, as a job's end stops its runs: redone on resume
+    db_.release_run(run_id);
+    stop_ = true;
+    throw Stopped{};
+  }
   db_.record_outcome(run_id, outcome);
   ++executed_;
   store::StoredRun r;

@@ -114,7 +114,7 @@ json outcome_to_json(const store::RunOutcome& o) {
   for (const auto& [k, v] : o.metrics) m[k] = v;
   return {{"status", store::to_string(o.status)}, {"message", o.message}, {"wall_s", o.wall_s},
           {"steps", o.steps}, {"particles", o.particles}, {"peak_rss_mb", o.peak_rss_mb},
-          {"host", o.host}, {"h5_path", o.h5_path}, {"metrics", m}};
+          {"host", o.host}, {"h5_path", o.h5_path}, {"metrics", m}, {"interrupted", o.interrupted}};
 }
 store::RunOutcome outcome_from_json(const json& j) {
   store::RunOutcome o;
@@ -126,6 +126,7 @@ store::RunOutcome outcome_from_json(const json& j) {
   o.peak_rss_mb = j.at("peak_rss_mb").get<double>();
   o.host = j.at("host").get<std::string>();
   o.h5_path = j.at("h5_path").get<std::string>();
+  o.interrupted = j.value("interrupted", false);
   for (auto it = j.at("metrics").begin(); it != j.at("metrics").end(); ++it)
     o.metrics.emplace_back(it.key(), it.value().get<double>());
   return o;
@@ -258,6 +259,19 @@ int run_campaign(const CampaignSpec& spec, const EngineOptions& options, int mpi
     if (!t) exhausted = true;
     return t;
   };
+  // Records a run's end; a run stopped by a signal (the job's end reaching it before the job, a stray kill)
+  // goes back to pending instead, up to kMaxInterruptions tries. Returns whether the run is finished.
+  auto settle = [&](const store::RunTicket& t, store::RunOutcome& out) {
+    constexpr std::int64_t kMaxInterruptions = 3;
+    if (out.interrupted && t.attempt < kMaxInterruptions) {
+      db.release_run(t.run_id);
+      return false;
+    }
+    if (out.interrupted)
+      out.message += "; stopped " + std::to_string(t.attempt) + " times, not retried again";
+    db.record_outcome(t.run_id, out);
+    return true;
+  };
   auto child_spec = [&](const store::RunTicket& t) {
     ChildSpec c;
     c.dir = run_directory(spec, options.db_file, static_cast<size_t>(t.design_index));
@@ -289,7 +303,11 @@ int run_campaign(const CampaignSpec& spec, const EngineOptions& options, int mpi
     for (size_t i = 0; i < local.size();) {
       store::RunOutcome out;
       if (poll_child(local[i].child, out)) {
-        db.record_outcome(local[i].ticket.run_id, out);
+        if (!settle(local[i].ticket, out)) {
+          local.erase(local.begin() + static_cast<long>(i));
+          busy = true;
+          continue;
+        }
         progress.finished(local[i].ticket.design_index, out, static_cast<int>(local.size()) - 1);
         local.erase(local.begin() + static_cast<long>(i));
         busy = true;
@@ -310,10 +328,10 @@ int run_campaign(const CampaignSpec& spec, const EngineOptions& options, int mpi
         if (st.MPI_TAG == kTagResult) {
           auto it = remote.find(rank);
           if (it != remote.end()) {
-            const store::RunOutcome out = outcome_from_json(json::parse(text));
-            db.record_outcome(it->second.run_id, out);
-            progress.finished(it->second.design_index, out,
-                              static_cast<int>(local.size() + remote.size()) - 1);
+            store::RunOutcome out = outcome_from_json(json::parse(text));
+            if (settle(it->second, out))
+              progress.finished(it->second.design_index, out,
+                                static_cast<int>(local.size() + remote.size()) - 1);
             remote.erase(it);
           }
         }

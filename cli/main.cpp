@@ -26,7 +26,7 @@ struct Command {
 
 const std::vector<Command>& commands() {
   static const std::vector<Command> list = {
-      {"run", flume::run_main, "run SCENE.json --out DIR [--set path=value ...] [--threads N] [--backend cpu|cuda] [--checkpoint-every S] [--resume]"},
+      {"run", flume::run_main, "run SCENE.json --out DIR [--set path=value ...] [--threads N] [--backend cpu|cuda] [--checkpoint-every S] [--resume] [--flush-every S]"},
       {"bench", flume::bench_main, "bench SCENE.json --steps N [--set path=value ...] [--threads N]"},
       {"check", flume::check_main, "check SCENE.json [--set path=value ...]   validate a scene, print a summary"},
       {"campaign", flume::campaign_main, "campaign run SPEC.json --db FILE [--workers N] | status --db FILE | export --db FILE --csv OUT"},

@@ -13,6 +13,7 @@
 
 #include "common/errors.h"
 #include "solver/run.h"
+#include "solver/run_output.h"
 #include "solver/scene.h"
 #include "solver/simulation.h"
 
@@ -27,6 +28,7 @@ struct Args {
   long steps = 0;
   bool quiet = false;
   CheckpointOptions checkpoints;
+  double flush_every_s = kDefaultFlushEvery_s;
 };
 
 int parse_int(const char* flag, const char* text, long lo, long hi) {
@@ -73,6 +75,13 @@ Args parse_args(int argc, char** argv, bool need_out, bool need_steps) {
       if (*end || !(v >= 1 && v <= 1e7))
         throw InputError("--checkpoint-every", "", std::string("expects wall-clock seconds in [1, 1e7] (got '") + text + "')");
       a.checkpoints.every_s = v;
+    } else if (s == "--flush-every") {
+      const char* text = value("--flush-every");
+      char* end = nullptr;
+      const double v = std::strtod(text, &end);
+      if (*end || !(v >= 0.1 && v <= 1e7))
+        throw InputError("--flush-every", "", std::string("expects wall-clock seconds in [0.1, 1e7] (got '") + text + "')");
+      a.flush_every_s = v;
     } else if (s == "--resume") {
       a.checkpoints.resume = true;
     } else if (s == "--quiet" || s == "-q") {
@@ -107,13 +116,15 @@ int guarded(const char* cmd, F&& body) {
 }  // namespace
 
 int run_main(int argc, char** argv) {
-  return guarded("run", [&] {
+  return guarded("run", [&]() -> int {
     const Args a = parse_args(argc, argv, true, false);
     const Scene scene = load_scene(a.scene, a.sets);
-    const RunOutcome r = run_scene(scene, a.options, a.out, !a.quiet, a.checkpoints);
+    install_stop_handlers();
+    const RunOutcome r = run_scene(scene, a.options, a.out, !a.quiet, a.checkpoints, a.flush_every_s);
     std::fprintf(stderr, "flume run: %s: %s (%ld steps, %zu particles, %.1f s, %.3g particle-steps/s)\n",
-                 r.status == RunStatus::kOk ? "ok" : "unstable", r.message.c_str(), r.cost.steps, r.cost.particles,
-                 r.cost.wall_s, r.cost.particle_steps_per_s);
+                 status_name(r.status).c_str(), r.message.c_str(), r.cost.steps, r.cost.particles, r.cost.wall_s,
+                 r.cost.particle_steps_per_s);
+    if (r.status == RunStatus::kKilled) return 128 + stop_signal();
     return r.status == RunStatus::kOk ? kExitOk : kExitUnstable;
   });
 }

@@ -87,6 +87,9 @@ struct RunOutcome {
   std::string host;
   std::string h5_path;  // empty: none written
   std::vector<std::pair<std::string, double>> metrics;
+  // Not stored: the run was stopped by SIGTERM/SIGINT before its end (run.json status "killed", exit 130 or
+  // 143). It did not finish, so the caller puts it back to pending rather than recording this outcome.
+  bool interrupted = false;
 };
 
 // A run as the store has it (a calibration looks its points up before running them).
