@@ -1,7 +1,5 @@
 #include "calibration/calibrate.h"
 
-#include <fcntl.h>
-#include <sys/file.h>
 #include <unistd.h>
 
 #include <Eigen/Dense>
@@ -20,6 +18,7 @@
 
 #include "calibration/evaluator.h"
 #include "calibration/report.h"
+#include "campaigns/run_folders.h"
 #include "common/duration.h"
 #include "common/errors.h"
 #include "flume_version.h"
@@ -32,24 +31,6 @@ using Clock = std::chrono::steady_clock;
 
 std::atomic<int> g_signal{0};
 extern "C" void on_signal(int sig) { g_signal = sig; }
-
-// One writer per store, shared with `flume campaign run`: an exclusive lock on "<db>.lock".
-class WriterLock {
- public:
-  explicit WriterLock(const std::string& db_file) {
-    const std::string file = db_file + ".lock";
-    fd_ = open(file.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
-    if (fd_ < 0) throw InputError(db_file, "", "cannot create the lock file " + file);
-    if (flock(fd_, LOCK_EX | LOCK_NB) != 0) {
-      close(fd_);
-      throw InputError(db_file, "", "another flume job is writing this database (" + file + " is locked)");
-    }
-  }
-  ~WriterLock() { close(fd_); }
-
- private:
-  int fd_ = -1;
-};
 
 // The name-to-algorithm table (spec.cpp holds the same names; a name missing here is a programming error).
 nlopt::algorithm nlopt_algorithm(const std::string& name) {
@@ -466,8 +447,11 @@ class Driver {
 }  // namespace
 
 int run_calibration(const CalibrationSpec& spec, const CalibrateOptions& options, CalibrationResult& result) {
-  WriterLock lock(options.db_file);
-  store::CampaignStore db(options.db_file);
+  store::CampaignStore db(options.db_file);  // the writer lock first: a refused job writes nothing anywhere
+  // Before a run is registered or made: the folders the runs and the results go to must be writable.
+  campaigns::check_writable_folder(campaigns::runs_base_folder(spec.run.output_dir, options.db_file, spec.name),
+                                   spec.file, "run.output_dir");
+  if (!options.out_dir.empty()) campaigns::check_writable_folder(options.out_dir, options.out_dir, "--out");
   std::int64_t campaign = 0;
   if (auto existing = db.find_campaign(spec.name)) {
     if (existing->spec_hash != spec.hash)

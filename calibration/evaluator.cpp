@@ -8,6 +8,7 @@
 #include <thread>
 
 #include "campaigns/process.h"
+#include "campaigns/run_folders.h"
 #include "campaigns/spec.h"
 #include "common/errors.h"
 
@@ -18,13 +19,7 @@ namespace fs = std::filesystem;
 using json = nlohmann::json;
 
 std::string run_directory(const CalibrationSpec& spec, const std::string& db_file, std::int64_t index) {
-  fs::path base =
-      spec.run.output_dir.empty() ? fs::path(db_file + ".runs") / spec.name : fs::path(spec.run.output_dir);
-  std::error_code ec;
-  base = fs::absolute(base, ec);
-  char leaf[32];
-  std::snprintf(leaf, sizeof leaf, "run-%06lld", static_cast<long long>(index));
-  return (base / leaf).lexically_normal().string();
+  return campaigns::run_folder(campaigns::runs_base_folder(spec.run.output_dir, db_file, spec.name), index);
 }
 
 }  // namespace
@@ -150,6 +145,11 @@ std::shared_ptr<const RunResult> Evaluator::execute(
   }
   std::lock_guard<std::mutex> lock(
       mutex_);  // also serialises the HDF5 reads (the library is not thread-safe)
+  if (outcome.interrupted) {  // stopped by SIGTERM/SIGINT, as a job's end stops its runs: redone on resume
+    db_.release_run(run_id);
+    stop_ = true;
+    throw Stopped{};
+  }
   db_.record_outcome(run_id, outcome);
   ++executed_;
   store::StoredRun r;

@@ -13,6 +13,7 @@
 
 #include "calibration/objective.h"
 #include "campaigns/gauge_model.h"
+#include "campaigns/run_folders.h"
 #include "campaigns/spec.h"
 #include "common/errors.h"
 #include "solver/scene.h"
@@ -253,10 +254,7 @@ CalibrationSpec parse_calibration_spec(const std::string& json_text, const std::
   json identity = json::object();  // what the results depend on; see CalibrationSpec::canonical
 
   spec.name = root.string("name", std::nullopt);
-  if (spec.name.empty() || spec.name.size() > 64 ||
-      spec.name.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_.-") !=
-          std::string::npos)
-    root.fail("name", "must be 1 to 64 characters from A-Z a-z 0-9 _ . - (got '" + spec.name + "')");
+  if (const std::string problem = campaigns::campaign_name_problem(spec.name); !problem.empty()) root.fail("name", problem);
   identity["name"] = spec.name;
   spec.description = root.string("description", std::string());
 

@@ -2,8 +2,6 @@
 // job killed at any moment resumes from the store: finished runs stay finished, in-flight ones are redone.
 #include "campaigns/engine.h"
 
-#include <fcntl.h>
-#include <sys/file.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -18,6 +16,7 @@
 
 #include "campaigns/process.h"
 #include "common/duration.h"
+#include "campaigns/run_folders.h"
 #include "common/errors.h"
 #include "flume_version.h"
 
@@ -35,25 +34,6 @@ using Clock = std::chrono::steady_clock;
 std::atomic<int> g_stop_signal{0};
 extern "C" void on_stop_signal(int sig) { g_stop_signal = sig; }
 
-// One writer per store: an exclusive lock on "<db>.lock", which the kernel drops if the holder dies.
-class WriterLock {
- public:
-  explicit WriterLock(const std::string& db_file) {
-    const std::string file = db_file + ".lock";
-    fd_ = open(file.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
-    if (fd_ < 0) throw InputError(db_file, "", "cannot create the lock file " + file);
-    if (flock(fd_, LOCK_EX | LOCK_NB) != 0) {
-      close(fd_);
-      throw InputError(db_file, "",
-                       "another `flume campaign run` is writing this database (" + file + " is locked); wait for it "
-                       "or stop it");
-    }
-  }
-  ~WriterLock() { close(fd_); }
-
- private:
-  int fd_ = -1;
-};
 
 // Progress: a line rewritten in place on a terminal, one plain line per finished run otherwise (logs).
 class Progress {
@@ -125,7 +105,7 @@ json outcome_to_json(const store::RunOutcome& o) {
   for (const auto& [k, v] : o.metrics) m[k] = v;
   return {{"status", store::to_string(o.status)}, {"message", o.message}, {"wall_s", o.wall_s},
           {"steps", o.steps}, {"particles", o.particles}, {"peak_rss_mb", o.peak_rss_mb},
-          {"host", o.host}, {"h5_path", o.h5_path}, {"metrics", m}};
+          {"host", o.host}, {"h5_path", o.h5_path}, {"metrics", m}, {"interrupted", o.interrupted}};
 }
 store::RunOutcome outcome_from_json(const json& j) {
   store::RunOutcome o;
@@ -137,6 +117,7 @@ store::RunOutcome outcome_from_json(const json& j) {
   o.peak_rss_mb = j.at("peak_rss_mb").get<double>();
   o.host = j.at("host").get<std::string>();
   o.h5_path = j.at("h5_path").get<std::string>();
+  o.interrupted = j.value("interrupted", false);
   for (auto it = j.at("metrics").begin(); it != j.at("metrics").end(); ++it)
     o.metrics.emplace_back(it.key(), it.value().get<double>());
   return o;
@@ -203,17 +184,14 @@ std::vector<std::string> run_command(const CampaignSpec& spec, size_t index, con
 }
 
 std::string run_directory(const CampaignSpec& spec, const std::string& db_file, size_t index) {
-  fs::path base = spec.run.output_dir.empty() ? fs::path(db_file + ".runs") / spec.name : fs::path(spec.run.output_dir);
-  std::error_code ec;
-  base = fs::absolute(base, ec);
-  char leaf[32];
-  std::snprintf(leaf, sizeof leaf, "run-%06zu", index);
-  return (base / leaf).lexically_normal().string();
+  return run_folder(runs_base_folder(spec.run.output_dir, db_file, spec.name), static_cast<std::int64_t>(index));
 }
 
 int run_campaign(const CampaignSpec& spec, const EngineOptions& options, int mpi_size) {
-  WriterLock lock(options.db_file);
-  store::CampaignStore db(options.db_file);
+  store::CampaignStore db(options.db_file);  // the writer lock first: a refused job writes nothing anywhere
+  // Before a run is registered: a folder that cannot be written stops the job before it starts.
+  check_writable_folder(runs_base_folder(spec.run.output_dir, options.db_file, spec.name), spec.file,
+                        "run.output_dir");
   const auto planned = plan_runs(spec);
   std::int64_t campaign = 0;
   if (auto existing = db.find_campaign(spec.name)) {
@@ -272,6 +250,19 @@ int run_campaign(const CampaignSpec& spec, const EngineOptions& options, int mpi
     if (!t) exhausted = true;
     return t;
   };
+  // Records a run's end; a run stopped by a signal (the job's end reaching it before the job, a stray kill)
+  // goes back to pending instead, up to kMaxInterruptions tries. Returns whether the run is finished.
+  auto settle = [&](const store::RunTicket& t, store::RunOutcome& out) {
+    constexpr std::int64_t kMaxInterruptions = 3;
+    if (out.interrupted && t.attempt < kMaxInterruptions) {
+      db.release_run(t.run_id);
+      return false;
+    }
+    if (out.interrupted)
+      out.message += "; stopped " + std::to_string(t.attempt) + " times, not retried again";
+    db.record_outcome(t.run_id, out);
+    return true;
+  };
   auto child_spec = [&](const store::RunTicket& t) {
     ChildSpec c;
     c.dir = run_directory(spec, options.db_file, static_cast<size_t>(t.design_index));
@@ -303,7 +294,11 @@ int run_campaign(const CampaignSpec& spec, const EngineOptions& options, int mpi
     for (size_t i = 0; i < local.size();) {
       store::RunOutcome out;
       if (poll_child(local[i].child, out)) {
-        db.record_outcome(local[i].ticket.run_id, out);
+        if (!settle(local[i].ticket, out)) {
+          local.erase(local.begin() + static_cast<long>(i));
+          busy = true;
+          continue;
+        }
         progress.finished(local[i].ticket.design_index, out, static_cast<int>(local.size()) - 1);
         local.erase(local.begin() + static_cast<long>(i));
         busy = true;
@@ -324,10 +319,10 @@ int run_campaign(const CampaignSpec& spec, const EngineOptions& options, int mpi
         if (st.MPI_TAG == kTagResult) {
           auto it = remote.find(rank);
           if (it != remote.end()) {
-            const store::RunOutcome out = outcome_from_json(json::parse(text));
-            db.record_outcome(it->second.run_id, out);
-            progress.finished(it->second.design_index, out,
-                              static_cast<int>(local.size() + remote.size()) - 1);
+            store::RunOutcome out = outcome_from_json(json::parse(text));
+            if (settle(it->second, out))
+              progress.finished(it->second.design_index, out,
+                                static_cast<int>(local.size() + remote.size()) - 1);
             remote.erase(it);
           }
         }

@@ -200,6 +200,16 @@ store::RunOutcome outcome_from_exit(int wait_status, bool timed_out, double time
     out.message = m.str();
     return out;
   }
+  // `flume run` stopped by SIGTERM/SIGINT ends cleanly with run.json status "killed" and exit 128 + signal
+  // (solver/run.h): not a result, and not the run's fault.
+  const int exit_code = WIFEXITED(wait_status) ? WEXITSTATUS(wait_status) : -1;
+  const int stop_sig = WIFSIGNALED(wait_status) ? WTERMSIG(wait_status) : exit_code > 128 ? exit_code - 128 : 0;
+  if (json_status == "killed" || stop_sig == SIGTERM || stop_sig == SIGINT) {
+    out.interrupted = true;
+    out.message = "stopped by signal " + std::to_string(stop_sig) + " (" + strsignal(stop_sig) + ") before its end";
+    if (!json_message.empty()) out.message += ": " + json_message;
+    return out;
+  }
   if (WIFSIGNALED(wait_status)) {
     const int sig = WTERMSIG(wait_status);
     out.message = "crashed: killed by signal " + std::to_string(sig) + " (" + strsignal(sig) + ")";

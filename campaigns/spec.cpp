@@ -14,6 +14,7 @@
 #include <sstream>
 
 #include "campaigns/models.h"
+#include "campaigns/run_folders.h"
 #include "common/errors.h"
 #include "solver/scene.h"
 
@@ -461,10 +462,7 @@ CampaignSpec parse_campaign_spec(const std::string& json_text, const std::string
   spec.file = file_label;
   Reader root(root_json, "", spec.file);
   spec.name = root.string("name", std::nullopt);
-  if (spec.name.empty() || spec.name.size() > 64 ||
-      spec.name.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_.-") !=
-          std::string::npos)
-    root.fail("name", "must be 1 to 64 characters from A-Z a-z 0-9 _ . - (got '" + spec.name + "')");
+  if (const std::string problem = campaign_name_problem(spec.name); !problem.empty()) root.fail("name", problem);
   spec.description = root.string("description", std::string());
 
   if (root.has("scene") == root.has("model"))

@@ -13,6 +13,8 @@ enum ExitCode : int {
   kExitInternal = 1,
   kExitInvalidInput = 2,
   kExitUnstable = 3,
+  // 128 + N: stopped by signal N. `flume run` stopped by SIGINT (130) or SIGTERM (143) first writes result.h5
+  // and run.json with status "killed" (solver/run.h); a campaign puts such a run back to pending.
 };
 
 // Bad user input: a malformed scene or spec, an out-of-range value, a missing file.

@@ -15,6 +15,7 @@
 #include "common/errors.h"
 #include "flume_version.h"
 #include "solver/run.h"
+#include "solver/run_output.h"
 #include "solver/scene.h"
 #include "solver/simulation.h"
 
@@ -30,6 +31,7 @@ struct Args {
   long steps = 0;
   bool quiet = false;
   CheckpointOptions checkpoints;
+  double flush_every_s = kDefaultFlushEvery_s;
 
   std::vector<Override> overrides() const {
     std::vector<Override> o;
@@ -65,13 +67,20 @@ void add_run_command(CLI::App& app) {
       ->check(CLI::Range(1.0, 1e7))
       ->type_name("S");
   app.add_flag("--resume", a->checkpoints.resume, "continue from DIR/checkpoint.bin");
+  app.add_option("--flush-every", a->flush_every_s,
+                 "flush the records to DIR/result.h5 every S wall-clock seconds, so a killed run keeps them "
+                 "(docs/reliability.md)")
+      ->check(CLI::Range(0.1, 1e7))
+      ->type_name("S");
   app.add_flag("-q,--quiet", a->quiet, "no progress lines");
   cli::on_parse(app, [a] {
     const Scene scene = load_scene(a->scene, a->overrides());
-    const RunOutcome r = run_scene(scene, a->simulation_options(), a->out, !a->quiet, a->checkpoints);
+    install_stop_handlers();
+    const RunOutcome r = run_scene(scene, a->simulation_options(), a->out, !a->quiet, a->checkpoints, a->flush_every_s);
     std::fprintf(stderr, "flume run: %s: %s (%ld steps, %zu particles, %.1f s, %.3g particle-steps/s)\n",
-                 r.status == RunStatus::kOk ? "ok" : "unstable", r.message.c_str(), r.cost.steps, r.cost.particles,
-                 r.cost.wall_s, r.cost.particle_steps_per_s);
+                 status_name(r.status).c_str(), r.message.c_str(), r.cost.steps, r.cost.particles, r.cost.wall_s,
+                 r.cost.particle_steps_per_s);
+    if (r.status == RunStatus::kKilled) return 128 + stop_signal();
     return r.status == RunStatus::kOk ? kExitOk : kExitUnstable;
   });
 }

@@ -5,6 +5,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <chrono>
+#include <csignal>
 #include <cstdio>
 #include <filesystem>
 
@@ -19,6 +20,27 @@
 
 namespace flume {
 
+namespace {
+volatile std::sig_atomic_t g_stop_signal = 0;
+void on_run_stop_signal(int sig) { g_stop_signal = sig; }
+std::string killed_message(int sig, double t) {
+  char buf[128];
+  std::snprintf(buf, sizeof buf, "killed by signal %d (%s) at t = %.4g s, before the end time", sig,
+                sig == SIGINT ? "SIGINT" : sig == SIGTERM ? "SIGTERM" : "a signal", t);
+  return buf;
+}
+}  // namespace
+
+void install_stop_handlers() {
+  struct sigaction sa {};
+  sa.sa_handler = on_run_stop_signal;
+  sigemptyset(&sa.sa_mask);
+  sigaction(SIGTERM, &sa, nullptr);
+  sigaction(SIGINT, &sa, nullptr);
+}
+
+int stop_signal() { return g_stop_signal; }
+
 double peak_rss_mb() {
   rusage u{};
   getrusage(RUSAGE_SELF, &u);
@@ -27,31 +49,31 @@ double peak_rss_mb() {
 
 void write_record(h5::RunFile& file, const Scene& scene, const Record& record) {
   for (const auto& [name, ts] : record.gauges) {
-    file.write_series("/gauges/" + name, "time", ts.time);
-    file.write_series("/gauges/" + name, "elevation", ts.values);
+    file.append_series("/gauges/" + name, "time", ts.time);
+    file.append_series("/gauges/" + name, "elevation", ts.values);
   }
   for (const auto& [name, ts] : record.probes) {
-    file.write_series("/probes/" + name, "time", ts.time);
-    file.write_matrix("/probes/" + name, "velocity", ts.values, ts.components);
+    file.append_series("/probes/" + name, "time", ts.time);
+    file.append_matrix("/probes/" + name, "velocity", ts.values, ts.components);
   }
   for (const auto& [name, ts] : record.loads) {
-    file.write_series("/loads/" + name, "time", ts.time);
-    file.write_matrix("/loads/" + name, "force", ts.values, ts.components);
+    file.append_series("/loads/" + name, "time", ts.time);
+    file.append_matrix("/loads/" + name, "force", ts.values, ts.components);
   }
   // /sections/<name>: time (n), depth and velocity (n in 2D; n x bins in 3D, with the bin centres y).
   for (const auto& [name, sr] : record.sections) {
     const std::string g = "/sections/" + name;
-    file.write_series(g, "time", sr.time);
+    file.append_series(g, "time", sr.time);
     if (sr.y.empty()) {
-      file.write_series(g, "depth", sr.depth);
-      file.write_series(g, "velocity", sr.velocity);
+      file.append_series(g, "depth", sr.depth);
+      file.append_series(g, "velocity", sr.velocity);
     } else {
-      file.write_series(g, "y", sr.y);
-      file.write_matrix(g, "depth", sr.depth, sr.bins());
-      file.write_matrix(g, "velocity", sr.velocity, sr.bins());
+      file.append_series(g, "y", sr.y);
+      file.append_matrix(g, "depth", sr.depth, sr.bins());
+      file.append_matrix(g, "velocity", sr.velocity, sr.bins());
     }
-    file.write_series(g, "z", sr.z);
-    file.write_matrix(g, "velocity_profile", sr.profile, sr.z.size());  // (time x bins) x layers
+    file.append_series(g, "z", sr.z);
+    file.append_matrix(g, "velocity_profile", sr.profile, sr.z.size());  // (time x bins) x layers
     file.set_attribute(g, "x_m", sr.x_m);
     file.set_attribute(g, "floor_m", sr.floor_m);
     file.set_attribute(g, "bin_width_m", sr.bin_width_m);
@@ -61,7 +83,7 @@ void write_record(h5::RunFile& file, const Scene& scene, const Record& record) {
                                    "z m (layer centres, layers dx thick from floor_m); velocity_profile m/s "
                                    "(time x bins rows, z columns; a layer without water holds the bin's velocity)");
   }
-  for (const auto& [name, v] : record.diagnostics) file.write_series("/diagnostics", name, v);
+  for (const auto& [name, v] : record.diagnostics) file.append_series("/diagnostics", name, v);
   file.set_attribute("/", "scene", scene.name);
   file.set_attribute("/", "scene_file", scene.file);
   file.set_attribute("/", "scene_json", scene.source_json);
@@ -141,7 +163,7 @@ void add_snapshot(h5::RunFile& file, const Simulation& sim) {
 }  // namespace
 
 RunOutcome run_scene(const Scene& scene, const SimulationOptions& options, const std::string& out_dir,
-                     bool progress, const CheckpointOptions& checkpoints) {
+                     bool progress, const CheckpointOptions& checkpoints, double flush_every_s) {
   namespace fs = std::filesystem;
   const bool checkpointing = checkpoints.every_s > 0 || checkpoints.resume;
   if (checkpointing && options.backend == Backend::kCuda)
@@ -167,6 +189,14 @@ RunOutcome run_scene(const Scene& scene, const SimulationOptions& options, const
   const std::string h5_path = (fs::path(out_dir) / "result.h5").string();
   h5::RunFile file = checkpoints.resume ? h5::RunFile(h5_path, sim->time()) : h5::RunFile(h5_path);
   file.set_attribute("/", "status", "running");
+  // Between two flushes nothing is written to the file but snapshots, each flushed too: a run killed outright
+  // leaves the file as of its last flush, which every HDF5 reader opens (docs/reliability.md).
+  const auto flush_record = [&] {
+    write_record(file, scene, sim->record());
+    file.set_attribute("/", "flushed_at_s", sim->time());
+    file.flush();
+  };
+  flush_record();
 
   const double snap_period = scene.instruments.snapshot_rate_hz > 0 ? 1.0 / scene.instruments.snapshot_rate_hz : 0;
   double next_snap = 0;
@@ -176,7 +206,7 @@ RunOutcome run_scene(const Scene& scene, const SimulationOptions& options, const
     std::fprintf(stderr, "kept %zu snapshot(s) taken before the checkpoint\n", file.snapshot_count());
   Progress report(scene.solver.end_time, sim->time(), sim->particle_count());
   const auto t0 = std::chrono::steady_clock::now();
-  auto last_ckpt = t0;
+  auto last_ckpt = t0, last_flush = t0;
   const auto save = [&] {
     StateArchive ar;
     ar.section("run");
@@ -194,22 +224,31 @@ RunOutcome run_scene(const Scene& scene, const SimulationOptions& options, const
   };
   RunStatus status = RunStatus::kRunning;
   while (true) {
-    if (snap_period > 0 && sim->time() + 1e-12 >= next_snap) {
+    if (snap_period > 0 && sim->time() + 1e-12 >= next_snap && status != RunStatus::kKilled) {
       add_snapshot(file, *sim);
+      file.flush();
       while (next_snap <= sim->time() + 1e-12) next_snap += snap_period;
     }
     if (status != RunStatus::kRunning) break;
     status = sim->step();
+    if (status == RunStatus::kRunning && stop_signal() != 0) status = RunStatus::kKilled;
+    if (status == RunStatus::kRunning &&
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - last_flush).count() >= flush_every_s) {
+      flush_record();
+      last_flush = std::chrono::steady_clock::now();
+    }
     if (progress) report.step(sim->time(), sim->steps(), sim->last_dt());
     if (checkpoints.every_s > 0 &&
-        (status == RunStatus::kOk ||
+        (status == RunStatus::kOk || status == RunStatus::kKilled ||
          (status == RunStatus::kRunning &&
           std::chrono::duration<double>(std::chrono::steady_clock::now() - last_ckpt).count() >= checkpoints.every_s)))
       save();
   }
   RunOutcome out;
   out.status = status;
-  out.message = status == RunStatus::kOk ? "completed" : sim->message();
+  out.message = status == RunStatus::kOk       ? "completed"
+                : status == RunStatus::kKilled ? killed_message(stop_signal(), sim->time())
+                                               : sim->message();
   out.cost.wall_s = wall_before + std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   out.cost.steps = sim->steps();
   out.cost.particles = sim->particle_count();
@@ -217,7 +256,7 @@ RunOutcome run_scene(const Scene& scene, const SimulationOptions& options, const
       out.cost.wall_s > 0 ? double(out.cost.steps) * double(out.cost.particles) / out.cost.wall_s : 0;
   out.cost.peak_rss_mb = peak_rss_mb();
   out.metrics = compute_metrics(scene, sim->record());
-  write_record(file, scene, sim->record());
+  flush_record();
   if (DebrisCoupling* debris = sim->debris()) {
     debris->finish();
     write_debris(file, debris->recorder());

@@ -14,6 +14,7 @@ std::string status_name(RunStatus s) {
   switch (s) {
     case RunStatus::kOk: return "ok";
     case RunStatus::kUnstable: return "unstable";
+    case RunStatus::kKilled: return "killed";
     default: return "running";
   }
 }

@@ -49,7 +49,8 @@ struct Record {
   std::map<std::string, std::vector<double>> diagnostics;  // time, mass, kinetic, potential, elastic, total, dt, max_speed, step
 };
 
-enum class RunStatus { kRunning, kOk, kUnstable };
+// kKilled: stopped by SIGTERM or SIGINT before the end time (solver/run.h); the solvers never return it.
+enum class RunStatus { kRunning, kOk, kUnstable, kKilled };
 
 // Cost counters, as `flume run` reports them.
 struct Cost {

@@ -15,6 +15,7 @@
 
 #include "calibration/records.h"
 #include "campaigns/engine.h"
+#include "campaigns/run_folders.h"
 #include "common/command.h"
 #include "common/errors.h"
 #include "common/plot/figure.h"
@@ -726,6 +727,7 @@ void add_study_command(CLI::App& app) {
     std::string out = a->out;
     const TradeoffSpec spec = load_tradeoff_spec(spec_file);
     if (out.empty()) out = (fs::path(db + ".study") / spec.campaign.name).string();
+    campaigns::check_writable_folder(out, out, "--out");  // before the campaign runs, not after
     campaigns::EngineOptions opt;
     opt.db_file = db;
     opt.local_workers = workers;

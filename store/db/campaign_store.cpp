@@ -13,6 +13,7 @@
 
 #include "common/errors.h"
 #include "common/number_text.h"
+#include "store/db/writer_lock.h"
 
 namespace flume::store {
 namespace {
@@ -53,11 +54,17 @@ std::string quote_text(const std::string& s) {
   return q + "'";
 }
 
+// "<file>: " for messages: a failure deep in a job must still say which database it was.
+std::string file_of(sqlite3* db) {
+  const char* f = sqlite3_db_filename(db, "main");
+  return f && *f ? std::string(f) + ": " : std::string();
+}
+
 class Stmt {
  public:
   Stmt(sqlite3* db, const std::string& sql) : db_(db) {
     if (sqlite3_prepare_v2(db, sql.c_str(), -1, &s_, nullptr) != SQLITE_OK)
-      throw StoreError(std::string("SQL prepare failed: ") + sqlite3_errmsg(db) + " in: " + sql);
+      throw StoreError(file_of(db) + "SQL prepare failed: " + sqlite3_errmsg(db) + " in: " + sql);
   }
   ~Stmt() { sqlite3_finalize(s_); }
   Stmt& bind(int i, std::int64_t v) { return check(sqlite3_bind_int64(s_, i, v)); }
@@ -73,7 +80,7 @@ class Stmt {
     const int rc = sqlite3_step(s_);
     if (rc == SQLITE_ROW) return true;
     if (rc == SQLITE_DONE) return false;
-    throw StoreError(std::string("SQL step failed: ") + sqlite3_errmsg(db_));
+    throw StoreError(file_of(db_) + "SQL step failed: " + sqlite3_errmsg(db_));
   }
   void run() {
     while (step()) {
@@ -96,7 +103,7 @@ class Stmt {
 
  private:
   Stmt& check(int rc) {
-    if (rc != SQLITE_OK) throw StoreError(std::string("SQL bind failed: ") + sqlite3_errmsg(db_));
+    if (rc != SQLITE_OK) throw StoreError(file_of(db_) + "SQL bind failed: " + sqlite3_errmsg(db_));
     return *this;
   }
   sqlite3* db_;
@@ -108,7 +115,7 @@ void exec(sqlite3* db, const std::string& sql) {
   if (sqlite3_exec(db, sql.c_str(), nullptr, nullptr, &err) != SQLITE_OK) {
     std::string msg = err ? err : "unknown error";
     sqlite3_free(err);
-    throw StoreError("SQL failed: " + msg + " in: " + sql.substr(0, 200));
+    throw StoreError(file_of(db) + "SQL failed: " + msg + " in: " + sql.substr(0, 200));
   }
 }
 
@@ -152,6 +159,7 @@ std::optional<RunStatus> run_status_from(const std::string& s) {
 }
 
 CampaignStore::CampaignStore(const std::string& file, bool read_only) : file_(file) {
+  if (!read_only) writer_lock_ = std::make_unique<WriterLock>(file);
   const int flags = read_only ? SQLITE_OPEN_READONLY : (SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE);
   if (sqlite3_open_v2(file.c_str(), &db_, flags, nullptr) != SQLITE_OK) {
     std::string msg = db_ ? sqlite3_errmsg(db_) : "out of memory";
@@ -179,6 +187,14 @@ CampaignStore::CampaignStore(const std::string& file, bool read_only) : file_(fi
     check_schema();
     // Version 1 files written before calibrations existed lack this table; adding it changes nothing else.
     if (!read_only) exec(db_, kEvaluationsTable);
+  } catch (const StoreError& e) {
+    // A folder without room for the -shm file, a file that is not SQLite: about the file given, not internal.
+    std::string what = e.what();
+    const std::string prefix = file_of(db_);
+    if (what.rfind(prefix, 0) == 0) what.erase(0, prefix.size());
+    sqlite3_close(db_);
+    db_ = nullptr;
+    throw InputError(file, "", "cannot use the campaign database: " + what);
   } catch (...) {
     sqlite3_close(db_);
     db_ = nullptr;

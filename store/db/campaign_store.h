@@ -16,6 +16,7 @@
 #pragma once
 #include <cstdint>
 #include <map>
+#include <memory>
 #include <optional>
 #include <ostream>
 #include <stdexcept>
@@ -25,6 +26,8 @@
 struct sqlite3;
 
 namespace flume::store {
+
+class WriterLock;
 
 // A failure of the database itself (corrupt file, disk full, locked past the timeout).
 class StoreError : public std::runtime_error {
@@ -84,6 +87,9 @@ struct RunOutcome {
   std::string host;
   std::string h5_path;  // empty: none written
   std::vector<std::pair<std::string, double>> metrics;
+  // Not stored: the run was stopped by SIGTERM/SIGINT before its end (run.json status "killed", exit 130 or
+  // 143). It did not finish, so the caller puts it back to pending rather than recording this outcome.
+  bool interrupted = false;
 };
 
 // A run as the store has it (a calibration looks its points up before running them).
@@ -127,8 +133,10 @@ class CampaignStore {
  public:
   static constexpr int kSchemaVersion = 1;
 
-  // Opens (and for a new file creates) the store. Throws flume::InputError naming the file for a file that
-  // is not a flume store or has another schema version; StoreError for SQLite failures.
+  // Opens (and for a new file creates) the store. Opened for writing, it holds the database's WriterLock
+  // (store/db/writer_lock.h) until destroyed: a second writer, through any path to the same file, is refused.
+  // Throws flume::InputError naming the file for a file that cannot be opened, is not a flume store, has
+  // another schema version or has another writer; StoreError for SQLite failures.
   explicit CampaignStore(const std::string& file, bool read_only = false);
   ~CampaignStore();
   CampaignStore(const CampaignStore&) = delete;
@@ -184,6 +192,7 @@ class CampaignStore {
   std::string results_select(std::int64_t campaign, std::vector<std::string>* metric_names);
 
   std::string file_;
+  std::unique_ptr<WriterLock> writer_lock_;  // before db_: released after the connection is closed
   sqlite3* db_ = nullptr;
   std::map<std::int64_t, std::vector<std::string>> known_metrics_;  // per campaign, to refresh views lazily
 };

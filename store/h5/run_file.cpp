@@ -2,6 +2,7 @@
 
 #include <hdf5.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -235,6 +236,56 @@ struct RunFile::Impl {
     if (!dset.close()) fail(part, "cannot close dataset " + where);
   }
 
+  // Writes rows [held, rows) of a float64 series of `cols` columns (0: 1-D) into an extendible dataset,
+  // creating it (chunked, unlimited rows) the first time.
+  void append_dataset(const std::string& group_path, const std::string& name, const double* data,
+                      std::size_t rows, std::size_t cols) {
+    require_open();
+    check_name(path, name);
+    const std::string where = group_path + "/" + name;
+    QuietErrors quiet;
+    Id g = group(group_path);
+    const int rank = cols == 0 ? 1 : 2;
+    const hsize_t width = cols == 0 ? 1 : cols;
+    htri_t exists = H5Lexists(g.get(), name.c_str(), H5P_DEFAULT);
+    if (exists < 0) fail(part, "cannot look up " + where);
+    Id dset;
+    if (exists == 0) {
+      const hsize_t dims[2] = {0, width}, max[2] = {H5S_UNLIMITED, width};
+      // About 32 KiB a chunk: small enough that a short series wastes little, large enough to append fast.
+      const hsize_t chunk[2] = {std::max<hsize_t>(1, 4096 / width), width};
+      Id space(H5Screate_simple(rank, dims, max), H5Sclose);
+      Id dcpl(H5Pcreate(H5P_DATASET_CREATE), H5Pclose);
+      if (!space.valid() || !dcpl.valid() || H5Pset_chunk(dcpl.get(), rank, chunk) < 0)
+        fail(part, "cannot set up the extendible dataset " + where);
+      dset = Id(H5Dcreate2(g.get(), name.c_str(), H5T_IEEE_F64LE, space.get(), H5P_DEFAULT, dcpl.get(),
+                           H5P_DEFAULT),
+                H5Dclose);
+      if (!dset.valid()) fail(part, "cannot create dataset " + where);
+    } else {
+      dset = Id(H5Dopen2(g.get(), name.c_str(), H5P_DEFAULT), H5Dclose);
+      if (!dset.valid()) fail(part, "cannot open dataset " + where);
+    }
+    Id space(H5Dget_space(dset.get()), H5Sclose);
+    hsize_t held[2] = {0, 0};
+    if (H5Sget_simple_extent_ndims(space.get()) != rank || H5Sget_simple_extent_dims(space.get(), held, nullptr) < 0 ||
+        (rank == 2 && held[1] != width))
+      throw std::logic_error(part + ": " + where + " changed shape between appends");
+    if (rows < held[0])
+      throw std::logic_error(part + ": " + where + " shrank from " + std::to_string(held[0]) + " to " +
+                             std::to_string(rows) + " rows");
+    if (rows == held[0]) return;
+    const hsize_t total[2] = {rows, width}, start[2] = {held[0], 0}, count[2] = {rows - held[0], width};
+    if (H5Dset_extent(dset.get(), total) < 0) fail(part, "cannot extend " + where);
+    Id file_space(H5Dget_space(dset.get()), H5Sclose);
+    Id mem_space(H5Screate_simple(rank, count, nullptr), H5Sclose);
+    if (H5Sselect_hyperslab(file_space.get(), H5S_SELECT_SET, start, nullptr, count, nullptr) < 0 ||
+        H5Dwrite(dset.get(), H5T_NATIVE_DOUBLE, mem_space.get(), file_space.get(), H5P_DEFAULT,
+                 data + held[0] * width) < 0)
+      fail(part, "cannot append to " + where);
+    if (!dset.close()) fail(part, "cannot close dataset " + where);
+  }
+
   // Replaces attribute `name` on `group_path` with a scalar of `file_type`.
   void write_attribute(const std::string& group_path, const std::string& name, hid_t file_type,
                        hid_t mem_type, const void* value) {
@@ -439,6 +490,20 @@ void RunFile::write_matrix(const std::string& group_path, const std::string& nam
   impl_->write_dataset(g.get(), where, name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE,
                        {static_cast<hsize_t>(row_major.size() / cols), static_cast<hsize_t>(cols)},
                        row_major.data(), false);
+}
+
+void RunFile::append_series(const std::string& group_path, const std::string& name,
+                            const std::vector<double>& values) {
+  impl_->append_dataset(group_path, name, values.data(), values.size(), 0);
+}
+
+void RunFile::append_matrix(const std::string& group_path, const std::string& name,
+                            const std::vector<double>& row_major, std::size_t cols) {
+  if (cols == 0 || row_major.size() % cols != 0)
+    throw std::invalid_argument(impl_->path + ": " + group_path + "/" + name + ": " +
+                                std::to_string(row_major.size()) + " values do not fill rows of " +
+                                std::to_string(cols) + " columns");
+  impl_->append_dataset(group_path, name, row_major.data(), row_major.size() / cols, cols);
 }
 
 void RunFile::set_attribute(const std::string& group_path, const std::string& name,

@@ -9,7 +9,9 @@
 // The full reference of the solver's file is docs/results.md.
 //
 // Crash safety: everything goes to `<path>.part`; finalize() closes it and renames it to `<path>`, so a
-// `result.h5` that exists is always complete. A killed process leaves only the `.part` file.
+// `result.h5` that exists is a run that ended (its `status` attribute says how: ok, unstable or killed). A
+// process killed outright leaves only the `.part` file, readable as of its last flush() (nothing is written
+// between flushes but what the caller writes then: see solver/run.cpp's cadence, docs/reliability.md).
 // Not thread-safe (the serial HDF5 library is not): use one RunFile from one thread.
 #pragma once
 #include <cstddef>
@@ -54,6 +56,13 @@ class RunFile {
   void write_matrix(const std::string& group_path, const std::string& name,
                     const std::vector<double>& row_major, std::size_t cols);
 
+  // A series that grows while the run goes on: `values` is the whole series so far, and only the rows beyond
+  // what the file already holds are written (a chunked dataset, unlimited along the rows). Called at each
+  // flush and at the end; the series may not shrink, a matrix's columns may not change.
+  void append_series(const std::string& group_path, const std::string& name, const std::vector<double>& values);
+  void append_matrix(const std::string& group_path, const std::string& name, const std::vector<double>& row_major,
+                     std::size_t cols);
+
   // Attributes on a group ("/" is the root; the group is created if missing). Setting one again replaces it,
   // so `status` can go from "running" to "complete" or "unstable".
   void set_attribute(const std::string& group_path, const std::string& name, const std::string& value);
@@ -77,7 +86,7 @@ class RunFile {
   // Stored as /debris_frames/<index, 5 digits>/corners with attribute `time`.
   void add_box_frame(double time, std::size_t bodies, const float* corners);
 
-  // Pushes buffered data to the `.part` file (it stays `.part`).
+  // Pushes buffered data to the `.part` file (it stays `.part`); after it the file opens in any HDF5 reader.
   void flush();
   // Closes the file, writes the XDMF sidecar when there are snapshots, and renames `.part` to the final
   // name. Called once, also when a run stops unstable (with `status` set accordingly).

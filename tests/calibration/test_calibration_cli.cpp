@@ -6,6 +6,7 @@
 #include <sqlite3.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -432,4 +433,22 @@ TEST(CalibrateResume, SigtermKillsTheRunInFlightAndLeavesItPending) {
   EXPECT_EQ(scalar(db, "SELECT count(*) FROM runs WHERE status = 'running'"), "0");
   EXPECT_EQ(scalar(db, "SELECT count(*) FROM runs WHERE status = 'pending'"), "1");
   EXPECT_NE(read_file(dir / "t.err").find("run the same command again to resume"), std::string::npos);
+}
+
+// Issue 29: an --out folder that cannot be made is refused before the calibration runs anything (it used to
+// run every evaluation and fail when writing calibration.json), in one line naming the folder and --out.
+TEST(CalibrateInputs, UnwritableOutFolderIsRefusedBeforeAnyRun) {
+  const fs::path dir = test_dir();
+  write_file(dir / "target.csv", "time_s,WG1\n0,0\n1,0.01\n2,0.02\n5,0\n");
+  write_file(dir / "spec.json", two_parameter_spec("out", R"({"name": "BOBYQA", "max_evaluations": 3})",
+                                                   R"(, "profile": {"points": 0})"));
+  write_file(dir / "plain-file", "not a folder\n");
+  const std::string out = (dir / "plain-file" / "out").string();
+  const Result r = run(
+      flume_cmd({"calibrate", (dir / "spec.json").string(), "--db", (dir / "s.db").string(), "--out", out}), dir);
+  EXPECT_EQ(r.rc, 2) << r.err;
+  EXPECT_NE(r.err.find(out + ": --out: "), std::string::npos) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  if (fs::exists(dir / "s.db")) EXPECT_EQ(scalar(dir / "s.db", "SELECT count(*) FROM runs"), "0");
+  EXPECT_FALSE(fs::exists(dir / "s.db.runs" / "out" / "run-000000"));
 }

@@ -4,6 +4,7 @@
 #include <sqlite3.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -387,4 +388,109 @@ TEST(CampaignExport, CsvHasOneRowPerRunWithParametersAndMetrics) {
     EXPECT_DOUBLE_EQ(std::stod(f[5]), std::stod(f[6]));
   }
   EXPECT_EQ(rows, 5);
+}
+
+// Issue 29: two `campaign run` jobs on one database, one through the path the other used and one through a
+// link to the same file (symlink or hard link), started together `trials` times. Each time one job runs the
+// campaign and the other is refused in one line naming the database it was given and the holder's pid, having
+// written nothing: no run is executed twice, no run folder is made beside the link.
+void two_writers_through_a_link(bool hard_link, int trials) {
+  const fs::path dir = test_dir();
+  const fs::path db = dir / "study.db", link = dir / "alias.db";
+  write_file(dir / "seed.json", test_spec("seed", 1, 0.0));
+  ASSERT_EQ(run(flume_cmd({"campaign", "run", (dir / "seed.json").string(), "--db", db.string()}), dir).rc, 0);
+  if (hard_link)
+    fs::create_hard_link(db, link);
+  else
+    fs::create_symlink(db, link);
+  const fs::path paths[2] = {db, link};
+  for (int k = 0; k < trials; ++k) {
+    const std::string name = "trial-" + std::to_string(k);
+    const fs::path spec = dir / (name + ".json");
+    write_file(spec, test_spec(name, 2, 0.3));  // two runs side by side: about 2 s of job on a loaded machine
+    pid_t pid[2];
+    for (int j = 0; j < 2; ++j) {  // the link's job starts first every other trial
+      const int w = (j + k) % 2;
+      pid[w] = spawn(flume_cmd({"campaign", "run", spec.string(), "--db", paths[w].string(), "--workers", "2"}),
+                     dir / ("out" + std::to_string(w)), dir / ("err" + std::to_string(w)));
+      ASSERT_GT(pid[w], 0);
+    }
+    const int rc[2] = {wait_for(pid[0], 60), wait_for(pid[1], 60)};
+    ASSERT_TRUE((rc[0] == 0 && rc[1] == 2) || (rc[0] == 2 && rc[1] == 0))
+        << "trial " << k << ": exit codes " << rc[0] << " and " << rc[1] << "; stderr: "
+        << read_file(dir / "err0") << " | " << read_file(dir / "err1");
+    const int loser = rc[0] == 2 ? 0 : 1;
+    const std::string err = read_file(dir / ("err" + std::to_string(loser)));
+    EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+    EXPECT_EQ(err.rfind(paths[loser].string() + ": another flume job (pid " + std::to_string(pid[1 - loser]) + ")", 0), 0u)
+        << err;
+    EXPECT_TRUE(read_file(dir / ("out" + std::to_string(loser))).empty());
+    EXPECT_FALSE(fs::exists(paths[loser].string() + ".runs/" + name)) << "the refused job made its run folder";
+    EXPECT_EQ(scalar(db, "SELECT count(*) FROM campaigns WHERE name = '" + name + "'"), "1");
+    EXPECT_EQ(scalar(db, "SELECT count(*) FROM runs r JOIN campaigns c ON c.id = r.campaign WHERE c.name = '" + name +
+                             "' AND r.status = 'ok' AND r.attempts = 1"),
+              "2")
+        << "trial " << k << ": a run was executed twice or not at all";
+  }
+  EXPECT_EQ(scalar(db, "SELECT count(*) FROM runs WHERE attempts != 1 OR status != 'ok'"), "0");
+  EXPECT_EQ(scalar(db, "PRAGMA integrity_check"), "ok");
+}
+
+TEST(CampaignWriters, SecondWriterThroughASymlinkIsRefusedEveryTime) { two_writers_through_a_link(false, 20); }
+TEST(CampaignWriters, SecondWriterThroughAHardLinkIsRefusedEveryTime) { two_writers_through_a_link(true, 20); }
+
+// Issue 29: a name that is a folder link, and a run folder that cannot be made, are refused before the
+// campaign is registered: exit 2, one line naming the spec and the field, the database unchanged, no folder
+// written beside the database.
+TEST(CampaignSpecErrors, DotNamesAndUnwritableRunFolderAreRefusedBeforeRegistering) {
+  const fs::path dir = test_dir();
+  const fs::path db = dir / "study.db", spec = dir / "bad.json";
+  write_file(dir / "good.json", test_spec("good", 2, 0.0));
+  ASSERT_EQ(run(flume_cmd({"campaign", "run", (dir / "good.json").string(), "--db", db.string()}), dir).rc, 0);
+  const std::string before = read_file(db);
+  write_file(dir / "plain-file", "not a folder\n");
+  const std::string under_a_file = (dir / "plain-file" / "runs").string();
+  std::string bad_output = test_spec("bad-output", 2, 0.0);
+  bad_output.replace(bad_output.find("\"run\": {"), 8, "\"run\": {\"output_dir\": \"" + under_a_file + "\", ");
+  const struct {
+    std::string spec, field;
+  } cases[] = {{test_spec("..", 2, 0.0), "name"}, {test_spec(".", 2, 0.0), "name"}, {bad_output, "run.output_dir"}};
+  for (const auto& c : cases) {
+    write_file(spec, c.spec);
+    const Result r = run(flume_cmd({"campaign", "run", spec.string(), "--db", db.string()}), dir);
+    EXPECT_EQ(r.rc, 2) << c.field << ": " << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    EXPECT_EQ(r.err.rfind(spec.string() + ": " + c.field + ": ", 0), 0u) << r.err;
+    EXPECT_EQ(read_file(db), before) << c.field;
+    EXPECT_EQ(scalar(db, "SELECT count(*) FROM campaigns"), "1");
+    EXPECT_EQ(scalar(db, "SELECT count(*) FROM runs WHERE status = 'running'"), "0");
+  }
+  EXPECT_FALSE(fs::exists(dir / "run-000000")) << "a run folder was written beside the database";
+  EXPECT_FALSE(fs::exists(dir / "study.db.runs" / "run-000000"));
+}
+
+// Issue 29: a database the job cannot write is refused in one line naming it, before anything runs. Root
+// writes through any mode bits, so there the read-only cases cannot be made and are skipped.
+TEST(CampaignSpecErrors, ReadOnlyDatabaseIsRefusedNamingTheFile) {
+  if (geteuid() == 0) GTEST_SKIP() << "root writes a read-only file";
+  const fs::path dir = test_dir();
+  const fs::path db = dir / "study.db";
+  write_file(dir / "a.json", test_spec("a", 2, 0.0));
+  ASSERT_EQ(run(flume_cmd({"campaign", "run", (dir / "a.json").string(), "--db", db.string()}), dir).rc, 0);
+  const std::string before = read_file(db);
+  write_file(dir / "b.json", test_spec("b", 2, 0.0));
+  fs::permissions(db, fs::perms::owner_read | fs::perms::group_read | fs::perms::others_read);
+  Result r = run(flume_cmd({"campaign", "run", (dir / "b.json").string(), "--db", db.string()}), dir);
+  EXPECT_EQ(r.rc, 2) << r.err;
+  EXPECT_EQ(r.err.rfind(db.string() + ": ", 0), 0u) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_EQ(read_file(db), before);
+  // A writable file in a folder where SQLite cannot make its -wal and -shm files.
+  fs::permissions(db, fs::perms::owner_read | fs::perms::owner_write);
+  fs::permissions(dir, fs::perms::owner_read | fs::perms::owner_exec);
+  r = run(flume_cmd({"campaign", "run", (dir / "b.json").string(), "--db", db.string()}), dir / "..");
+  fs::permissions(dir, fs::perms::owner_all);
+  EXPECT_EQ(r.rc, 2) << r.err;
+  EXPECT_EQ(r.err.rfind(db.string() + ": ", 0), 0u) << r.err;
+  EXPECT_EQ(read_file(db), before);
 }
