@@ -12,6 +12,7 @@
 #include "report/paths.h"
 #include "report/report.h"
 #include "solver/commands.h"
+#include "surrogate/commands.h"
 #ifdef FLUME_HAVE_STUDY
 #include "study/tradeoff.h"
 #endif
@@ -37,6 +38,7 @@ const std::vector<Command>& commands() {
 #ifdef FLUME_HAVE_STUDY
       {"study", flume::study::study_main, "study tradeoff SPEC.json --db FILE [--out DIR] [--workers N]   error against cost over fidelity settings, Pareto front"},
 #endif
+      {"surrogate", flume::surrogate_main, "surrogate fit|predict|sobol|show --db FILE --campaign NAME --metric M ...   polynomial chaos and kriging surrogates of a campaign's runs"},
       {"calibrate", flume::calibration::calibrate_main, "calibrate SPEC.json --db FILE --out DIR [--workers N] | target RESULT.h5 --out CSV | history --db FILE"},
   };
   return list;
