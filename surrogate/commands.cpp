@@ -26,7 +26,8 @@ using surrogate::Kind;
 const char* kUsage =
     "usage:\n"
     "  flume surrogate fit --db FILE --campaign NAME --metric M[,M2...] [--kind chaos|kriging|both] [--degree D]\n"
-    "        [--folds K] [--holdout N] [--bootstrap B] [--thresholds t1,t2,...] [--seed S] [--force]\n"
+    "        [--folds K] [--holdout N | --validation CAMPAIGN] [--bootstrap B] [--thresholds t1,t2,...] [--seed S]\n"
+    "        [--force]\n"
     "  flume surrogate predict --db FILE --campaign NAME --metric M [--kind chaos|kriging] --at x1=v,x2=v [--at ...]\n"
     "  flume surrogate sobol --db FILE --campaign NAME --metric M      first and total Sobol' indices (chaos)\n"
     "  flume surrogate show --db FILE --campaign NAME                  the stored surrogates and their Q2\n"
@@ -106,6 +107,8 @@ Args parse_args(int argc, char** argv) {
       a.settings.folds = parse_count(s, value(), 0, 100000);
     } else if (s == "--holdout") {
       a.settings.holdout = parse_count(s, value(), 0, 1000000);
+    } else if (s == "--validation") {
+      a.settings.validation = value();
     } else if (s == "--bootstrap") {
       a.settings.bootstrap = parse_count(s, value(), 0, 100000);
     } else if (s == "--seed") {

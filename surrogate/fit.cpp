@@ -218,7 +218,7 @@ FitResult fit_surrogate(const TrainingData& data, const FitSettings& s) {
 
 std::string settings_json(const FitSettings& s) {
   return json{{"kind", to_string(s.kind)}, {"degree", s.degree},         {"folds", s.folds},
-              {"holdout", s.holdout},      {"bootstrap", s.bootstrap},   {"confidence", s.confidence},
+              {"holdout", s.holdout},      {"validation", s.validation}, {"bootstrap", s.bootstrap},   {"confidence", s.confidence},
               {"mc_size", s.mc_size},      {"thresholds", s.thresholds}, {"seed", s.seed}}
       .dump();
 }

@@ -26,6 +26,7 @@ struct FitSettings {
   int degree = 0;            // chaos total degree; 0: the largest whose full basis has at most n terms
   std::size_t folds = 5;     // k of the k-fold Q2; 0 or >= n: leave-one-out
   std::size_t holdout = 0;   // the last runs (design order) kept out of the fit for a held-back Q2
+  std::string validation;    // or: another campaign (same parameters) whose runs are the held-back ones
   std::size_t bootstrap = 200;  // chaos replicates for the intervals; 0: none
   double confidence = 0.95;
   std::size_t mc_size = 20000;  // input sample of the exceedance curve (per replicate: mc_size / 10)

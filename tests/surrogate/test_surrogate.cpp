@@ -11,6 +11,7 @@
 
 #include "tests/common/run_command.h"
 #include "tests/report/campaign_fixture.h"
+#include "common/errors.h"
 #include "report/report.h"
 #include "surrogate/stored.h"
 
@@ -35,17 +36,18 @@ double ishigami(const std::vector<double>& x) {
   return std::sin(x[0]) + kA * std::pow(std::sin(x[1]), 2) + kB * std::pow(x[2], 4) * std::sin(x[0]);
 }
 
-std::string ishigami_spec(int runs) {
+std::string ishigami_spec(int runs, const std::string& name = "ishigami", int seed = 5) {
   std::string x;
   for (const char* v : {"x1", "x2", "x3"})
     x += std::string(x.empty() ? "" : ", ") + R"({"path": ")" + v +
          R"(", "distribution": {"type": "uniform", "lower": -3.141592653589793, "upper": 3.141592653589793}})";
-  return R"({"name": "ishigami", "model": "ishigami", "parameters": [)" + x +
-         R"(], "design": {"type": "lhs", "samples": )" + std::to_string(runs) + R"(}, "seed": 5})";
+  return R"({"name": ")" + name + R"(", "model": "ishigami", "parameters": [)" + x +
+         R"(], "design": {"type": "lhs", "samples": )" + std::to_string(runs) + R"(}, "seed": )" +
+         std::to_string(seed) + "}";
 }
 
-void make_ishigami(const fs::path& db, int runs) {
-  flume::test::make_campaign(db.string(), ishigami_spec(runs), [](const std::vector<double>& x, std::int64_t) {
+void make_ishigami(const fs::path& db, int runs, const std::string& name = "ishigami", int seed = 5) {
+  flume::test::make_campaign(db.string(), ishigami_spec(runs, name, seed), [](const std::vector<double>& x, std::int64_t) {
     return flume::test::ok_outcome({{"y", ishigami(x)}});
   });
 }
@@ -182,6 +184,25 @@ TEST(Store, FitIsIdempotentAndFollowsTheRuns) {
   s.degree = 3;
   EXPECT_TRUE(fit_and_store(db, "ishigami", "y", s).refitted);
   EXPECT_EQ(stored_surrogate_list(db, "ishigami").size(), 1u);  // replaced, not added
+}
+
+// Held-back runs from another campaign of the same parameters: the fit uses none of them.
+TEST(Store, ValidationCampaignRunsAreHeldBack) {
+  const fs::path dir = test_dir();
+  make_ishigami(dir / "s.db", 30);
+  make_ishigami(dir / "s.db", 12, "check", 9);
+  FitSettings s;
+  s.bootstrap = 0;
+  s.mc_size = 500;
+  s.validation = "check";
+  const auto fit = fit_and_store((dir / "s.db").string(), "ishigami", "y", s);
+  const json q = json::parse(fit.record.quality_json), runs = json::parse(fit.record.runs_json);
+  EXPECT_EQ(q["n_train"].get<int>(), 30);
+  EXPECT_EQ(q["n_holdout"].get<int>(), 12);
+  EXPECT_TRUE(q["q2_holdout"].is_number());
+  for (const auto& id : runs["holdout"]) EXPECT_GT(id.get<int>(), 30);  // the second campaign's runs
+  s.holdout = 3;
+  EXPECT_THROW(fit_and_store((dir / "s.db").string(), "ishigami", "y", s), flume::InputError);
 }
 
 // A store written before surrogates existed (no surrogates table) still opens: read-only it lists none,
