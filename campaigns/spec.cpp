@@ -450,6 +450,53 @@ std::string value_json(const ParameterSpec& p, double value) {
   return json(value).dump();  // shortest text that reads back to the same double
 }
 
+// The `parameters` and `correlation` sections (shared by the full parse and parse_spec_parameters).
+static void read_parameters(Reader& root, const json& root_json, CampaignSpec& spec) {
+  const json& params = root.array("parameters");
+  if (spec.listed && !params.empty())
+    root.fail("parameters", "must be absent with a list design (its points name the paths they set)");
+  if (params.empty() && !spec.listed)
+    root.fail("parameters", "is required: a non-empty array of {path, distribution}");
+  (void)root_json;
+  std::set<std::string> paths;
+  for (size_t i = 0; i < params.size(); ++i) {
+    Reader p(params[i], "parameters." + std::to_string(i), spec.file);
+    ParameterSpec ps;
+    ps.path = p.string("path", std::nullopt);
+    if (ps.path.empty()) p.fail("path", "must not be empty");
+    if (!paths.insert(ps.path).second) p.fail("path", "'" + ps.path + "' is already a parameter");
+    for (const auto& [path, value] : spec.overrides)
+      if (path == ps.path) p.fail("path", "'" + ps.path + "' is also a fixed override");
+    if (!p.has("distribution")) p.fail("distribution", "is required (an object with a type)");
+    Reader d = p.object("distribution");
+    ps.distribution = read_distribution(d);
+    p.finish();
+    spec.parameters.push_back(ps);
+  }
+
+  const json& corr = root.array("correlation");
+  if (spec.listed && !corr.empty()) root.fail("correlation", "must be absent with a list design");
+  for (size_t i = 0; i < corr.size(); ++i) {
+    Reader c(corr[i], "correlation." + std::to_string(i), spec.file);
+    const json& pair = c.array("parameters");
+    if (pair.size() != 2 || !pair[0].is_string() || !pair[1].is_string())
+      c.fail("parameters", "must be an array of two parameter paths");
+    sampling::RankCorrelation rc;
+    auto index_of = [&](const std::string& path, int k) {
+      for (size_t j = 0; j < spec.parameters.size(); ++j)
+        if (spec.parameters[j].path == path) return j;
+      c.fail("parameters." + std::to_string(k), "'" + path + "' is not one of the campaign's parameters");
+    };
+    rc.a = index_of(pair[0].get<std::string>(), 0);
+    rc.b = index_of(pair[1].get<std::string>(), 1);
+    if (rc.a == rc.b) c.fail("parameters", "must name two different parameters");
+    rc.rho = c.number("rank", std::nullopt, -0.99, 0.99);
+    c.finish();
+    spec.correlations.push_back(rc);
+  }
+
+}
+
 CampaignSpec parse_campaign_spec(const std::string& json_text, const std::string& file_label,
                                  const std::string& base_dir) {
   json root_json;
@@ -495,47 +542,7 @@ CampaignSpec parse_campaign_spec(const std::string& json_text, const std::string
 
   spec.listed = root_json.contains("design") && root_json["design"].is_object() &&
                 root_json["design"].contains("type") && root_json["design"]["type"] == "list";
-  const json& params = root.array("parameters");
-  if (spec.listed && !params.empty())
-    root.fail("parameters", "must be absent with a list design (its points name the paths they set)");
-  if (params.empty() && !spec.listed)
-    root.fail("parameters", "is required: a non-empty array of {path, distribution}");
-  std::set<std::string> paths;
-  for (size_t i = 0; i < params.size(); ++i) {
-    Reader p(params[i], "parameters." + std::to_string(i), spec.file);
-    ParameterSpec ps;
-    ps.path = p.string("path", std::nullopt);
-    if (ps.path.empty()) p.fail("path", "must not be empty");
-    if (!paths.insert(ps.path).second) p.fail("path", "'" + ps.path + "' is already a parameter");
-    for (const auto& [path, value] : spec.overrides)
-      if (path == ps.path) p.fail("path", "'" + ps.path + "' is also a fixed override");
-    if (!p.has("distribution")) p.fail("distribution", "is required (an object with a type)");
-    Reader d = p.object("distribution");
-    ps.distribution = read_distribution(d);
-    p.finish();
-    spec.parameters.push_back(ps);
-  }
-
-  const json& corr = root.array("correlation");
-  if (spec.listed && !corr.empty()) root.fail("correlation", "must be absent with a list design");
-  for (size_t i = 0; i < corr.size(); ++i) {
-    Reader c(corr[i], "correlation." + std::to_string(i), spec.file);
-    const json& pair = c.array("parameters");
-    if (pair.size() != 2 || !pair[0].is_string() || !pair[1].is_string())
-      c.fail("parameters", "must be an array of two parameter paths");
-    sampling::RankCorrelation rc;
-    auto index_of = [&](const std::string& path, int k) {
-      for (size_t j = 0; j < spec.parameters.size(); ++j)
-        if (spec.parameters[j].path == path) return j;
-      c.fail("parameters." + std::to_string(k), "'" + path + "' is not one of the campaign's parameters");
-    };
-    rc.a = index_of(pair[0].get<std::string>(), 0);
-    rc.b = index_of(pair[1].get<std::string>(), 1);
-    if (rc.a == rc.b) c.fail("parameters", "must name two different parameters");
-    rc.rho = c.number("rank", std::nullopt, -0.99, 0.99);
-    c.finish();
-    spec.correlations.push_back(rc);
-  }
+  read_parameters(root, root_json, spec);
 
   if (spec.listed) {
     Reader d = root.object("design");
@@ -621,6 +628,23 @@ CampaignSpec parse_campaign_spec(const std::string& json_text, const std::string
   }
   validate_against_target(spec, design);
   spec.points = std::move(design);
+  return spec;
+}
+
+CampaignSpec parse_spec_parameters(const std::string& json_text, const std::string& file_label) {
+  CampaignSpec spec;
+  spec.file = file_label;
+  json root_json;
+  try {
+    root_json = json::parse(json_text);
+  } catch (const json::parse_error& e) {
+    throw InputError(file_label, "", std::string("not valid JSON: ") + e.what());
+  }
+  Reader root(root_json, "", spec.file);
+  spec.listed = root_json.contains("design") && root_json["design"].is_object() &&
+                root_json["design"].contains("type") && root_json["design"]["type"] == "list";
+  if (root_json.contains("model") && root_json["model"].is_string()) spec.model = root_json["model"];
+  read_parameters(root, root_json, spec);
   return spec;
 }
 

@@ -58,6 +58,10 @@ CampaignSpec load_campaign_spec(const std::string& file);
 CampaignSpec parse_campaign_spec(const std::string& json_text, const std::string& file_label,
                                  const std::string& base_dir);
 
+// Only the model name, the parameters and their correlations of a spec (a stored campaign's, read back to
+// know its input distributions): no scene or design checks, no design generated.
+CampaignSpec parse_spec_parameters(const std::string& json_text, const std::string& file_label);
+
 // The parameter path of a list design that selects the scene file rather than setting a scene value.
 inline constexpr const char* kScenePath = "scene";
 

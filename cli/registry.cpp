@@ -8,6 +8,7 @@
 #include "report/report.h"
 #include "solver/commands.h"
 #include "study/tradeoff.h"
+#include "surrogate/commands.h"
 
 namespace flume::cli {
 
@@ -26,6 +27,8 @@ const std::vector<Command>& commands() {
       {"model", "analytic stand-ins for `flume run` (campaign tests)", add_model_command, nullptr},
       {"study", "error against cost over fidelity settings, Pareto front", study::add_study_command, nullptr},
       {"calibrate", "fit scene parameters to measured gauges", calibration::add_calibrate_command, nullptr},
+      {"surrogate", "polynomial chaos and kriging surrogates of a campaign's runs, Sobol' indices, posteriors",
+       nullptr, surrogate_main},
   };
   return list;
 }

@@ -8,8 +8,10 @@
 
 #include "common/plot/figure.h"
 #include "flume_version.h"
+#include "report/html_parts.h"
 #include "report/map.h"
 #include "report/report.h"
+#include "report/surrogates.h"
 
 namespace flume::report {
 namespace {
@@ -17,32 +19,7 @@ namespace {
 namespace plot = flume::plot;
 using plot::xml_escape;
 
-std::string fmt(double v, int digits = 4) {
-  if (std::isnan(v)) return "n/a";
-  if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.*g", digits, v);
-  return buf;
-}
-
-std::string est(const Estimate& e, int digits = 4) {
-  return fmt(e.value, digits) + " <span class=ci>[" + fmt(e.ci.lo, digits) + ", " + fmt(e.ci.hi, digits) +
-         "]</span>";
-}
-
-std::string pct(double conf) { return fmt(conf * 100, 3) + " %"; }
-
-const plot::Color kBlue = plot::palette(0), kOrange = plot::palette(1), kGreen = plot::palette(2),
-                  kVermillion = plot::palette(3), kPurple = plot::palette(4), kGrey{120, 120, 120};
-
-// A figure that cannot be drawn (bad data) becomes a note instead of ending the report.
-std::string svg_or_note(const plot::Figure& fig) {
-  try {
-    return fig.to_svg();
-  } catch (const std::exception& e) {
-    return "<p class=note>figure not drawn: " + xml_escape(e.what()) + "</p>";
-  }
-}
+using namespace html;
 
 int bins_for(std::size_t n) { return std::clamp(static_cast<int>(std::sqrt(static_cast<double>(n))), 8, 40); }
 
@@ -338,11 +315,6 @@ void metrics_section(std::ostringstream& h, const Report& r) {
   h << "</section>\n";
 }
 
-std::string bar(double v, const plot::Color& c) {
-  const double w = std::clamp(std::isfinite(v) ? std::abs(v) : 0.0, 0.0, 1.0) * 100;
-  return "<span class=bar style=\"width:" + fmt(w, 3) + "px;background:" + c.hex() + "\"></span>";
-}
-
 void sensitivity_section(std::ostringstream& h, const Report& r) {
   const double conf = r.options.stats.confidence;
   h << "<section id=sensitivity><h2>Sensitivity</h2>\n";
@@ -486,11 +458,13 @@ std::string render_html(const Report& r) {
          "model "
          "debris`, not from the solver; the numbers exercise the report, they are not predictions.</p>\n";
   h << "<nav><a href=#runs>Runs</a><a href=#debris>Debris spreading</a><a href=#metrics>Metrics</a>"
-       "<a href=#sensitivity>Sensitivity</a><a href=#convergence>Convergence</a></nav>\n";
+       "<a href=#sensitivity>Sensitivity</a><a href=#surrogates>Surrogates</a><a href=#convergence>Convergence</a>"
+       "</nav>\n";
   runs_section(h, r);
   debris_section(h, r);
   metrics_section(h, r);
   sensitivity_section(h, r);
+  surrogates_section(h, r);
   convergence_section(h, r);
   h << "<script>" << kCheckScript << "</script>\n</body></html>\n";
   return h.str();

@@ -203,6 +203,7 @@ Report build_report(const ReportOptions& options) {
   });
 
   r.debris = analyse_debris(d, r.sample, options.cell_m, options.stats);
+  r.surrogates = load_surrogates(options.db_file, d.record.id);
   return r;
 }
 
@@ -299,6 +300,24 @@ void write_report(const Report& r) {
                       {"nistor_eq58_m", nistor_longitudinal_m(g.n_debris)},
                       {"probabilities", pr}});
   }
+  json surrogates = json::array();
+  for (const auto& s : r.surrogates) {
+    json e = {{"metric", s.metric},         {"kind", s.kind},         {"n_train", s.n_train},
+              {"n_holdout", s.n_holdout},   {"folds", s.folds},       {"q2_cv", jnum(s.q2_cv)},
+              {"q2_holdout", jnum(s.q2_holdout)}, {"mean", s.mean},   {"std", s.std}};
+    if (!s.first.empty()) {
+      json sb = json::object();
+      for (std::size_t k = 0; k < s.inputs.size() && k < s.first.size(); ++k)
+        sb[s.inputs[k]] = {{"first", jest(s.first[k])}, {"total", jest(s.total[k])}};
+      e["sobol"] = sb;
+    }
+    json curve = json::array();
+    for (std::size_t i = 0; i < s.thresholds.size(); ++i)
+      curve.push_back({{"threshold", s.thresholds[i]}, {"p", s.p[i]}, {"lo", jnum(s.p_lo[i])}, {"hi", jnum(s.p_hi[i])}});
+    e["exceedance"] = curve;
+    surrogates.push_back(e);
+  }
+  j["surrogates"] = surrogates;
   j["debris"] = {{"runs_with_debris", r.debris.runs_with_debris}, {"groups", groups}};
   write_text(dir / "summary.json", j.dump(2) + "\n");
 

@@ -17,6 +17,7 @@ class App;
 #include "report/debris.h"
 #include "report/sensitivity.h"
 #include "report/statistics.h"
+#include "report/surrogates.h"
 
 namespace flume::report {
 
@@ -59,6 +60,7 @@ struct Report {
   std::vector<std::string> sensitivity_inputs;  // parameter paths (text parameters coded by first appearance)
   std::vector<MetricReport> metrics;
   DebrisAnalysis debris;
+  std::vector<SurrogateSummary> surrogates;  // stored by `flume surrogate fit`
 };
 
 // Throws flume::InputError for a bad option (unknown metric in thresholds, ...) or store.

@@ -43,12 +43,7 @@ std::vector<std::vector<double>> to_values(const OT::Sample& unit, const std::ve
     }
     return values;
   }
-  OT::CorrelationMatrix spearman(dim);
-  for (const auto& c : correlations) spearman(c.a, c.b) = c.rho;
-  OT::CorrelationMatrix pearson = OT::NormalCopula::GetCorrelationFromSpearmanCorrelation(spearman);
-  if (!pearson.isPositiveDefinite())
-    throw std::invalid_argument("the rank correlation matrix is not positive definite");
-  const OT::ComposedDistribution joint(marginals, OT::NormalCopula(pearson));
+  const OT::Distribution joint = detail::make_ot_joint(parameters, correlations);
   // Unit cube -> independent standard normals -> the joint law (Nataf), all by OpenTURNS.
   const OT::Normal standard(dim);
   OT::Sample z(unit.getSize(), dim);
@@ -73,6 +68,21 @@ OT::Sample base_experiment(DesignType type, size_t dim, size_t n) {
 }
 
 }  // namespace
+
+namespace detail {
+OT::Distribution make_ot_joint(const std::vector<Distribution>& parameters,
+                               const std::vector<RankCorrelation>& correlations) {
+  OT::ComposedDistribution::DistributionCollection marginals;
+  for (const auto& p : parameters) marginals.add(make_ot_distribution(p));
+  if (correlations.empty()) return OT::ComposedDistribution(marginals);
+  OT::CorrelationMatrix spearman(parameters.size());
+  for (const auto& c : correlations) spearman(c.a, c.b) = c.rho;
+  OT::CorrelationMatrix pearson = OT::NormalCopula::GetCorrelationFromSpearmanCorrelation(spearman);
+  if (!pearson.isPositiveDefinite())
+    throw std::invalid_argument("the rank correlation matrix is not positive definite");
+  return OT::ComposedDistribution(marginals, OT::NormalCopula(pearson));
+}
+}  // namespace detail
 
 const char* to_string(DesignType t) {
   switch (t) {

@@ -31,6 +31,21 @@ CREATE TABLE IF NOT EXISTS evaluations (
   PRIMARY KEY (campaign, phase, start, seq));
 )SQL";
 
+constexpr const char* kSurrogatesTable = R"SQL(
+CREATE TABLE IF NOT EXISTS surrogates (
+  id INTEGER PRIMARY KEY,
+  campaign INTEGER NOT NULL REFERENCES campaigns(id),
+  metric TEXT NOT NULL,
+  kind TEXT NOT NULL CHECK (kind IN ('chaos', 'kriging')),
+  settings TEXT NOT NULL,
+  runs TEXT NOT NULL,
+  runs_hash TEXT NOT NULL,
+  quality TEXT NOT NULL,
+  model BLOB NOT NULL,
+  created TEXT NOT NULL,
+  UNIQUE (campaign, metric, kind));
+)SQL";
+
 constexpr const char* kStatuses[] = {"pending", "running", "ok", "unstable", "failed", "timeout"};
 
 // Columns of `runs` other than the parameters: a parameter path may not reuse one of these names.
@@ -187,6 +202,8 @@ CampaignStore::CampaignStore(const std::string& file, bool read_only) : file_(fi
     check_schema();
     // Version 1 files written before calibrations existed lack this table; adding it changes nothing else.
     if (!read_only) exec(db_, kEvaluationsTable);
+    // Likewise for files written before surrogates existed.
+    if (!read_only) exec(db_, kSurrogatesTable);
   } catch (const StoreError& e) {
     // A folder without room for the -shm file, a file that is not SQLite: about the file given, not internal.
     std::string what = e.what();
@@ -265,6 +282,7 @@ CREATE VIEW IF NOT EXISTS run_results AS
   FROM runs r JOIN campaigns c ON c.id = r.campaign;
 )SQL");
   exec(db_, kEvaluationsTable);
+  exec(db_, kSurrogatesTable);
   Stmt meta(db_, "INSERT INTO meta (key, value) VALUES ('schema_version', ?1), ('created_by', 'flume')");
   meta.bind(1, std::to_string(kSchemaVersion)).run();
   exec(db_, "PRAGMA user_version = " + std::to_string(kSchemaVersion));
@@ -618,6 +636,51 @@ std::vector<Evaluation> CampaignStore::evaluations(std::int64_t campaign) {
     out.push_back(std::move(e));
   }
   return out;
+}
+
+void CampaignStore::save_surrogate(const SurrogateRecord& r) {
+  Transaction t(db_);
+  Stmt s(db_,
+         "INSERT OR REPLACE INTO surrogates (campaign, metric, kind, settings, runs, runs_hash, quality, model, "
+         "created) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, strftime('%Y-%m-%dT%H:%M:%fZ', 'now'))");
+  s.bind(1, r.campaign).bind(2, r.metric).bind(3, r.kind).bind(4, r.settings_json).bind(5, r.runs_json);
+  s.bind(6, r.runs_hash).bind(7, r.quality_json).bind(8, r.model).run();
+  t.commit();
+}
+
+std::vector<SurrogateRecord> CampaignStore::surrogates(std::int64_t campaign, bool with_model) {
+  std::vector<SurrogateRecord> out;
+  {
+    Stmt has(db_, "SELECT count(*) FROM sqlite_master WHERE type = 'table' AND name = 'surrogates'");
+    has.step();
+    if (has.i64(0) == 0) return out;  // a file from before surrogates, opened read-only
+  }
+  Stmt s(db_, std::string("SELECT id, campaign, metric, kind, settings, runs, runs_hash, quality, ") +
+                  (with_model ? "model" : "''") +
+                  ", created FROM surrogates WHERE campaign = ?1 ORDER BY metric, kind");
+  s.bind(1, campaign);
+  while (s.step()) {
+    SurrogateRecord r;
+    r.id = s.i64(0);
+    r.campaign = s.i64(1);
+    r.metric = s.text(2);
+    r.kind = s.text(3);
+    r.settings_json = s.text(4);
+    r.runs_json = s.text(5);
+    r.runs_hash = s.text(6);
+    r.quality_json = s.text(7);
+    r.model = s.text(8);
+    r.created = s.text(9);
+    out.push_back(std::move(r));
+  }
+  return out;
+}
+
+std::optional<SurrogateRecord> CampaignStore::find_surrogate(std::int64_t campaign, const std::string& metric,
+                                                             const std::string& kind) {
+  for (auto& r : surrogates(campaign))
+    if (r.metric == metric && r.kind == kind) return r;
+  return std::nullopt;
 }
 
 StatusSummary CampaignStore::summary(std::int64_t campaign) {

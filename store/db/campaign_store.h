@@ -11,6 +11,9 @@
 //   evaluations(campaign, phase, start, seq, run, params, value, terms)   an optimizer's objective evaluations
 //        (calibrations, whose runs are added one at a time as they are evaluated); added to version 1 files
 //        when they are opened for writing
+//   surrogates(id, campaign, metric, kind, settings, runs, runs_hash, quality, model, created)   fitted
+//        surrogates (`flume surrogate fit`): the run ids they were fitted to, their validation and the
+//        OpenTURNS model; added to older version 1 files when they are opened for writing, like evaluations
 // Views: run_results (one row per run, its parameters and its metrics as a JSON object) and, per campaign,
 // "results_<campaign>" with one column per parameter and per metric.
 #pragma once
@@ -117,6 +120,21 @@ struct Evaluation {
   std::string terms_json;   // the objective's terms
 };
 
+// A surrogate of one metric of a campaign (surrogate/): one row per (campaign, metric, kind), replaced when
+// it is refitted. The JSON texts and the model are written and read by the surrogate module only.
+struct SurrogateRecord {
+  std::int64_t id = 0;
+  std::int64_t campaign = 0;
+  std::string metric;
+  std::string kind;           // "chaos" | "kriging"
+  std::string settings_json;  // what the fit was asked for (degree, folds, holdout, seed)
+  std::string runs_json;      // the ids of the runs it was fitted and validated on
+  std::string runs_hash;      // of settings_json + runs_json: an unchanged fit is not redone
+  std::string quality_json;   // Q2, predictions against observations, Sobol' indices, exceedance curve
+  std::string model;          // the fitted OpenTURNS result (its XML study)
+  std::string created;        // ISO 8601 UTC
+};
+
 struct StatusSummary {
   std::map<RunStatus, std::int64_t> counts;
   struct Failure {
@@ -178,6 +196,14 @@ class CampaignStore {
   RunTicket claim_run(std::int64_t run_id, const std::string& host, const std::string& worker);
   void record_evaluation(std::int64_t campaign, const Evaluation& e);
   std::vector<Evaluation> evaluations(std::int64_t campaign);
+
+  // Writes a surrogate, replacing the one of the same campaign, metric and kind, in one transaction.
+  void save_surrogate(const SurrogateRecord& s);
+  // The campaign's surrogates (empty for a file written before surrogates existed); `with_model` false leaves
+  // `model` empty (the report needs only the quality).
+  std::vector<SurrogateRecord> surrogates(std::int64_t campaign, bool with_model = true);
+  std::optional<SurrogateRecord> find_surrogate(std::int64_t campaign, const std::string& metric,
+                                                const std::string& kind);
 
   StatusSummary summary(std::int64_t campaign);
   // One row per design point: campaign, design_index, run id, status, message, parameters, metrics, cost.

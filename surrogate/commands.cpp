@@ -1,0 +1,331 @@
+// `flume surrogate`: argument parsing and printing only; the work is in fit.cpp and stored.cpp.
+#include "surrogate/commands.h"
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "common/errors.h"
+#include "surrogate/adaptive_campaign.h"
+#include "surrogate/multilevel.h"
+#include "surrogate/posterior.h"
+#include "surrogate/stored.h"
+
+namespace flume {
+namespace {
+
+using json = nlohmann::json;
+using surrogate::Kind;
+
+const char* kUsage =
+    "usage:\n"
+    "  flume surrogate fit --db FILE --campaign NAME --metric M[,M2...] [--kind chaos|kriging|both] [--degree D]\n"
+    "        [--folds K] [--holdout N | --validation CAMPAIGN] [--bootstrap B] [--thresholds t1,t2,...] [--seed S]\n"
+    "        [--force]\n"
+    "  flume surrogate predict --db FILE --campaign NAME --metric M [--kind chaos|kriging] --at x1=v,x2=v [--at ...]\n"
+    "  flume surrogate sobol --db FILE --campaign NAME --metric M      first and total Sobol' indices (chaos)\n"
+    "  flume surrogate show --db FILE --campaign NAME                  the stored surrogates and their Q2\n"
+    "  flume surrogate adapt SPEC.json --db FILE --metric M [--batch B] [--max-runs N] [--target-q2 Q]\n"
+    "        [--threshold T [--target-width W]] [--candidates C] [--folds K] [--workers N] [--seed S]\n"
+    "        grow the campaign a batch at a time where the kriging is least sure\n"
+    "  flume surrogate multilevel --db FILE --low NAME --high NAME --metric M [--cost-low S --cost-high S]\n"
+    "        two-level Monte Carlo mean of a high-fidelity metric, against high runs alone at the same cost\n"
+    "  flume surrogate posterior --db FILE --calibration NAME --noise-m SIGMA [--samples N] [--seed S]\n"
+    "        posterior of a calibration's parameters by MCMC on a kriging surrogate of its misfit\n";
+
+struct Args {
+  std::string verb, db, campaign;
+  std::vector<std::string> metrics, at;
+  std::string kind = "chaos";
+  surrogate::FitSettings settings;
+  bool force = false;
+  std::vector<std::string> positional;
+  surrogate::AdaptiveCampaignOptions adapt;
+  bool has_threshold = false;
+  std::string low, high;
+  double cost_low = 0, cost_high = 0;
+  std::string calibration;
+  surrogate::PosteriorSettings posterior;
+  bool has_noise = false;
+};
+
+std::vector<std::string> split(const std::string& s, char sep) {
+  std::vector<std::string> out;
+  std::stringstream ss(s);
+  std::string item;
+  while (std::getline(ss, item, sep))
+    if (!item.empty()) out.push_back(item);
+  return out;
+}
+
+double parse_number(const std::string& option, const std::string& text, double lo, double hi) {
+  char* end = nullptr;
+  const double v = std::strtod(text.c_str(), &end);
+  if (text.empty() || *end || !std::isfinite(v) || v < lo || v > hi) {
+    char range[96];
+    std::snprintf(range, sizeof range, "must be a number in [%g, %g]", lo, hi);
+    throw InputError("command line", option, std::string(range) + " (got '" + text + "')");
+  }
+  return v;
+}
+
+std::size_t parse_count(const std::string& option, const std::string& text, double lo, double hi) {
+  const double v = parse_number(option, text, lo, hi);
+  if (v != std::floor(v)) throw InputError("command line", option, "must be an integer (got '" + text + "')");
+  return static_cast<std::size_t>(v);
+}
+
+Args parse_args(int argc, char** argv) {
+  Args a;
+  if (argc < 2) throw InputError("command line", "", "expected a verb: fit, predict, sobol, show, adapt, multilevel or posterior");
+  a.verb = argv[1];
+  for (int i = 2; i < argc; ++i) {
+    const std::string s = argv[i];
+    auto value = [&]() -> std::string {
+      if (i + 1 >= argc) throw InputError("command line", s, "needs a value");
+      return argv[++i];
+    };
+    if (s == "--db") {
+      a.db = value();
+    } else if (s == "--campaign") {
+      a.campaign = value();
+    } else if (s == "--metric") {
+      a.metrics = split(value(), ',');
+    } else if (s == "--kind") {
+      a.kind = value();
+      if (a.kind != "chaos" && a.kind != "kriging" && a.kind != "both")
+        throw InputError("command line", "--kind", "must be chaos, kriging or both (got '" + a.kind + "')");
+    } else if (s == "--degree") {
+      a.settings.degree = static_cast<int>(parse_count(s, value(), 1, 20));
+    } else if (s == "--folds") {
+      a.settings.folds = parse_count(s, value(), 0, 100000);
+    } else if (s == "--holdout") {
+      a.settings.holdout = parse_count(s, value(), 0, 1000000);
+    } else if (s == "--validation") {
+      a.settings.validation = value();
+    } else if (s == "--bootstrap") {
+      a.settings.bootstrap = parse_count(s, value(), 0, 100000);
+    } else if (s == "--seed") {
+      a.settings.seed = parse_count(s, value(), 0, 4294967295.0);
+    } else if (s == "--thresholds") {
+      for (const auto& t : split(value(), ',')) a.settings.thresholds.push_back(parse_number(s, t, -1e300, 1e300));
+    } else if (s == "--at") {
+      a.at.push_back(value());
+    } else if (s == "--force") {
+      a.force = true;
+    } else if (s == "--batch") {
+      a.adapt.adapt.batch = parse_count(s, value(), 1, 10000);
+    } else if (s == "--max-runs") {
+      a.adapt.max_runs = parse_count(s, value(), 1, 1000000);
+    } else if (s == "--target-q2") {
+      a.adapt.target_q2 = parse_number(s, value(), 0, 1);
+    } else if (s == "--target-width") {
+      a.adapt.target_width = parse_number(s, value(), 0, 1);
+    } else if (s == "--threshold") {
+      a.adapt.adapt.threshold = parse_number(s, value(), -1e300, 1e300);
+      a.adapt.adapt.criterion = surrogate::Criterion::kExceedance;
+      a.has_threshold = true;
+    } else if (s == "--candidates") {
+      a.adapt.adapt.candidates = parse_count(s, value(), 10, 1000000);
+    } else if (s == "--workers") {
+      a.adapt.workers = static_cast<int>(parse_count(s, value(), 1, 4096));
+    } else if (s == "--calibration") {
+      a.calibration = value();
+    } else if (s == "--noise-m") {
+      a.posterior.noise_m = parse_number(s, value(), 1e-9, 10);
+      a.has_noise = true;
+    } else if (s == "--samples") {
+      a.posterior.samples = parse_count(s, value(), 100, 10000000);
+    } else if (s == "--low") {
+      a.low = value();
+    } else if (s == "--high") {
+      a.high = value();
+    } else if (s == "--cost-low") {
+      a.cost_low = parse_number(s, value(), 1e-9, 1e9);
+    } else if (s == "--cost-high") {
+      a.cost_high = parse_number(s, value(), 1e-9, 1e9);
+    } else if (!s.empty() && s[0] != '-') {
+      a.positional.push_back(s);
+    } else {
+      throw InputError("command line", s, "unknown option");
+    }
+  }
+  if (a.db.empty()) throw InputError("command line", "--db", "is required (the campaign database file)");
+  if (a.verb != "show" && a.verb != "adapt" && a.positional.size())
+    throw InputError("command line", a.positional[0], "unexpected argument");
+  if (a.verb != "show" && a.verb != "posterior" && a.metrics.empty()) throw InputError("command line", "--metric", "is required");
+  return a;
+}
+
+std::vector<Kind> kinds(const Args& a) {
+  if (a.kind == "both") return {Kind::kChaos, Kind::kKriging};
+  return {*surrogate::kind_from(a.kind)};
+}
+
+std::string fmt(const json& v) {
+  if (v.is_null()) return "n/a";
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.4f", v.get<double>());
+  return buf;
+}
+
+void print_quality(const std::string& metric, const json& q, const char* state) {
+  std::printf("%s %s (%s): %zu runs", metric.c_str(), q["kind"].get<std::string>().c_str(), state,
+              q["n_train"].get<std::size_t>());
+  if (q.contains("degree"))
+    std::printf(", degree %d, %zu terms", q["degree"].get<int>(), q["terms"].get<std::size_t>());
+  std::printf(", Q2 %zu-fold %s", q["folds"].get<std::size_t>(), fmt(q["q2_cv"]).c_str());
+  if (q["n_holdout"].get<std::size_t>() > 0)
+    std::printf(", Q2 on %zu held-back runs %s", q["n_holdout"].get<std::size_t>(), fmt(q["q2_holdout"]).c_str());
+  std::printf(", mean %.6g, std %.6g\n", q["mean"].get<double>(), q["std"].get<double>());
+}
+
+int fit(const Args& a) {
+  for (const auto& metric : a.metrics)
+    for (Kind k : kinds(a)) {
+      surrogate::FitSettings s = a.settings;
+      s.kind = k;
+      const auto r = surrogate::fit_and_store(a.db, a.campaign, metric, s, a.force);
+      print_quality(metric, json::parse(r.record.quality_json), r.refitted ? "fitted" : "up to date");
+    }
+  return kExitOk;
+}
+
+int predict(const Args& a) {
+  if (a.at.empty()) throw InputError("command line", "--at", "is required: name=value,... for each point");
+  if (a.kind == "both") throw InputError("command line", "--kind", "must be chaos or kriging for predict");
+  const Kind k = *surrogate::kind_from(a.kind);
+  const auto rec = surrogate::stored_surrogate(a.db, a.campaign, a.metrics.front(), k);
+  const json q = json::parse(rec.quality_json);
+  const auto inputs = q["inputs"].get<std::vector<std::string>>();
+  std::vector<std::vector<double>> points;
+  for (const auto& at : a.at) {
+    std::map<std::string, double> given;
+    for (const auto& kv : split(at, ',')) {
+      const auto eq = kv.find('=');
+      if (eq == std::string::npos) throw InputError("command line", "--at", "expected name=value (got '" + kv + "')");
+      given[kv.substr(0, eq)] = parse_number("--at " + kv.substr(0, eq), kv.substr(eq + 1), -1e300, 1e300);
+    }
+    std::vector<double> p;
+    for (const auto& in : inputs) {
+      if (!given.count(in)) throw InputError("command line", "--at", "missing input '" + in + "'");
+      p.push_back(given[in]);
+      given.erase(in);
+    }
+    if (!given.empty()) throw InputError("command line", "--at", "'" + given.begin()->first + "' is not an input");
+    points.push_back(p);
+  }
+  const surrogate::Surrogate model(k, rec.model);
+  const auto y = model.predict(points);
+  const auto v = model.variance(points);
+  for (const auto& in : inputs) std::printf("%s,", in.c_str());
+  std::printf("%s%s\n", a.metrics.front().c_str(), v.empty() ? "" : ",std");
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    for (double x : points[i]) std::printf("%.10g,", x);
+    std::printf("%.10g", y[i]);
+    if (!v.empty()) std::printf(",%.6g", std::sqrt(std::max(v[i], 0.0)));
+    std::printf("\n");
+  }
+  return kExitOk;
+}
+
+int sobol(const Args& a) {
+  for (const auto& metric : a.metrics) {
+    const auto rec = surrogate::stored_surrogate(a.db, a.campaign, metric, Kind::kChaos);
+    const json q = json::parse(rec.quality_json);
+    const auto inputs = q["inputs"].get<std::vector<std::string>>();
+    const double conf = q["confidence"].get<double>();
+    std::printf("# %s: Sobol' indices from the chaos expansion (%zu runs, Q2 %s), %.0f %% bootstrap intervals "
+                "(%zu replicates)\ninput,first,first_lo,first_hi,total,total_lo,total_hi\n",
+                metric.c_str(), q["n_train"].get<std::size_t>(), fmt(q["q2_cv"]).c_str(), 100 * conf,
+                q["sobol"]["replicates"].get<std::size_t>());
+    for (std::size_t j = 0; j < inputs.size(); ++j) {
+      const json& f = q["sobol"]["first"][j];
+      const json& t = q["sobol"]["total"][j];
+      std::printf("%s,%s,%s,%s,%s,%s,%s\n", inputs[j].c_str(), fmt(f["value"]).c_str(), fmt(f["lo"]).c_str(),
+                  fmt(f["hi"]).c_str(), fmt(t["value"]).c_str(), fmt(t["lo"]).c_str(), fmt(t["hi"]).c_str());
+    }
+  }
+  return kExitOk;
+}
+
+int adapt(Args a) {
+  if (a.positional.size() != 1) throw InputError("command line", "SPEC", "expected exactly one campaign spec file");
+  if (a.metrics.size() != 1) throw InputError("command line", "--metric", "takes one metric for adapt");
+  a.adapt.spec_file = a.positional[0];
+  a.adapt.db_file = a.db;
+  a.adapt.metric = a.metrics[0];
+  a.adapt.folds = a.settings.folds;
+  a.adapt.adapt.seed = a.settings.seed;
+  if (a.adapt.target_q2 <= 0 && a.adapt.target_width <= 0)
+    throw InputError("command line", "--target-q2", "or --target-width is required (when to stop)");
+  const auto o = surrogate::run_adaptive_campaign(a.adapt);
+  if (o.exit_code > 128) return o.exit_code;
+  std::printf("adapt: %s after %zu batch(es), %zu design points\n",
+              o.reached ? "target reached" : "run budget spent", o.batches, o.runs);
+  return kExitOk;
+}
+
+int multilevel(const Args& a) {
+  if (a.low.empty() || a.high.empty()) throw InputError("command line", "--low", "and --high campaigns are required");
+  const auto samples = surrogate::load_two_levels(a.db, a.low, a.high, a.metrics.front(), a.cost_low, a.cost_high);
+  const auto e = surrogate::two_level_estimate(samples, a.settings.confidence);
+  std::printf("two-level Monte Carlo (Giles 2008) of E[%s]: %.6g, %.0f %% interval [%.6g, %.6g], std %.4g\n",
+              a.metrics.front().c_str(), e.mean, 100 * a.settings.confidence, e.lo, e.hi, std::sqrt(e.variance));
+  std::printf("runs: %zu low only, %zu pairs; cost per run %.4g s low, %.4g s high; spent %.4g s\n", e.n0, e.n1,
+              samples.cost_low_s, samples.cost_high_s, e.cost_s);
+  std::printf("variances: low %.4g, correction %.4g, high %.4g\n", e.v0, e.v1, e.v_high);
+  std::printf("high runs alone at the same cost: std %.4g (%.2f times the two-level std); for the same std they "
+              "would cost %.4g s (%.2f times)\n",
+              std::sqrt(e.high_only_variance), std::sqrt(e.high_only_variance / e.variance), e.high_only_cost_s,
+              e.high_only_cost_s / e.cost_s);
+  std::printf("optimal allocation: %.3g low-only runs per pair\n", e.optimal_n0_per_n1);
+  return kExitOk;
+}
+
+int posterior(Args a) {
+  if (a.calibration.empty()) throw InputError("command line", "--calibration", "is required");
+  if (!a.has_noise) throw InputError("command line", "--noise-m", "is required (the gauge noise, m)");
+  a.posterior.seed = a.settings.seed;
+  a.posterior.confidence = a.settings.confidence;
+  const auto data = surrogate::load_calibration_misfit(a.db, a.calibration);
+  const auto post = surrogate::misfit_posterior(data, a.posterior);
+  std::printf("# posterior of '%s': %zu evaluations, misfit surrogate Q2 5-fold %.4f, noise %.4g m over %.0f "
+              "residuals, %zu MCMC samples (acceptance %.2f)\nparameter,best,mean,median,lo,hi\n",
+              a.calibration.c_str(), post.evaluations, post.q2, a.posterior.noise_m, data.n_residuals,
+              a.posterior.samples, post.acceptance);
+  for (const auto& p : post.parameters)
+    std::printf("%s,%.6g,%.6g,%.6g,%.6g,%.6g\n", p.name.c_str(), p.best, p.mean, p.median, p.lo, p.hi);
+  return kExitOk;
+}
+
+int show(const Args& a) {
+  const auto rec = surrogate::stored_surrogate_list(a.db, a.campaign);
+  if (rec.empty()) std::printf("no surrogates stored for this campaign\n");
+  for (const auto& r : rec) print_quality(r.metric, json::parse(r.quality_json), r.created.c_str());
+  return kExitOk;
+}
+
+}  // namespace
+
+int surrogate_main(int argc, char** argv) {
+  return guarded_main("flume surrogate", kUsage, [&] {
+    const Args a = parse_args(argc, argv);
+    if (a.verb == "fit") return fit(a);
+    if (a.verb == "predict") return predict(a);
+    if (a.verb == "sobol") return sobol(a);
+    if (a.verb == "show") return show(a);
+    if (a.verb == "adapt") return adapt(a);
+    if (a.verb == "multilevel") return multilevel(a);
+    if (a.verb == "posterior") return posterior(a);
+    throw InputError("command line", a.verb, "unknown verb (fit, predict, sobol, show, adapt, multilevel, posterior)");
+  });
+}
+
+}  // namespace flume

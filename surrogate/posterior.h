@@ -1,0 +1,53 @@
+// Calibration with uncertainty: the posterior of a calibration's free parameters given the gauge records
+// under a noise model, sampled by OpenTURNS' RandomWalkMetropolisHastings on a kriging surrogate of the
+// misfit rather than on solver runs.
+//   likelihood  independent Gaussian residuals of standard deviation sigma (the noise model):
+//               log L(theta) = -SSR(theta) / (2 sigma^2) + const,  SSR = sum of squared residuals over the
+//               n samples of every target record (n RMS^2, RMS the calibration's stored term)
+//   prior       uniform on the calibration's bounds
+//   surrogate   kriging of SSR over the stored evaluations (every optimizer and profile point), in unit
+//               coordinates of the bounds
+// Gauge residuals are correlated in time, so with the full sample count the intervals are optimistic; the
+// noise model's sigma (or an effective n) is the user's statement of how much the records constrain.
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace flume::surrogate {
+
+struct MisfitData {
+  std::vector<std::string> names;
+  std::vector<double> lower, upper;
+  std::vector<std::vector<double>> points;  // parameter values of each evaluation
+  std::vector<double> ssr;                  // its sum of squared residuals, m^2
+  double n_residuals = 0;
+};
+
+struct PosteriorSettings {
+  double noise_m = 0.005;
+  std::size_t samples = 20000, burn_in = 2000;
+  double confidence = 0.95;
+  std::uint64_t seed = 1;
+};
+
+struct PosteriorParameter {
+  std::string name;
+  double best = 0;  // the evaluation with the least misfit
+  double mean = 0, median = 0, lo = 0, hi = 0;
+};
+
+struct Posterior {
+  std::vector<PosteriorParameter> parameters;
+  std::size_t evaluations = 0;
+  double acceptance = 0;
+  double q2 = 0;  // k-fold Q2 of the misfit surrogate
+};
+
+Posterior misfit_posterior(const MisfitData& data, const PosteriorSettings& settings);
+
+// The stored evaluations of calibration `name` (flume calibrate): failed evaluations are left out. Throws
+// flume::InputError naming the file for an unknown calibration or too few evaluations.
+MisfitData load_calibration_misfit(const std::string& db_file, const std::string& name);
+
+}  // namespace flume::surrogate

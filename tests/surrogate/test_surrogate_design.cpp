@@ -1,0 +1,234 @@
+// Adaptive designs, the two-level Monte Carlo estimator and the calibration posterior against analytic
+// answers.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <random>
+
+#include "common/errors.h"
+#include "surrogate/adaptive.h"
+#include "surrogate/multilevel.h"
+#include "surrogate/posterior.h"
+#include "surrogate/stored.h"
+#include "tests/common/run_command.h"
+#include "tests/report/campaign_fixture.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+using namespace flume::surrogate;
+
+fs::path test_dir() {
+  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+  const fs::path dir = fs::temp_directory_path() /
+                       ("flume_surrogate_" + std::to_string(getpid()) + "_" + info->test_suite_name() + "_" + info->name());
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+flume::sampling::Distribution uniform(double lo, double hi) {
+  flume::sampling::Distribution d;
+  d.lower = lo;
+  d.upper = hi;
+  return d;
+}
+
+// Conditioning a Gaussian process on one more point never raises its variance anywhere, so within a batch
+// (kriging believer, covariance kept) the variance at each pick is at most that of the pick before.
+TEST(Adaptive, BatchPicksWhereTheVarianceIsLargestAndItFalls) {
+  TrainingData t;
+  t.inputs = {"a", "b"};
+  t.distributions = {uniform(0, 1), uniform(0, 1)};
+  std::mt19937_64 rng(4);
+  std::uniform_real_distribution<double> u(0, 1);
+  for (int i = 0; i < 8; ++i) {
+    const double a = u(rng), b = u(rng);
+    t.x.push_back({a, b});
+    t.y.push_back(std::sin(6 * a) + b * b);
+    t.run_ids.push_back(i + 1);
+  }
+  AdaptiveSettings s;
+  s.batch = 6;
+  s.candidates = 500;
+  const Proposal p = propose_batch(t, s);
+  ASSERT_EQ(p.points.size(), 6u);
+  for (std::size_t i = 0; i < p.points.size(); ++i) {
+    EXPECT_GE(p.points[i][0], 0.0);
+    EXPECT_LE(p.points[i][0], 1.0);
+    if (i > 0) {
+      EXPECT_LE(p.score[i], p.score[i - 1] * (1 + 1e-6)) << "pick " << i;
+    }
+  }
+  EXPECT_GT(p.score.front(), 0.0);
+  // Deterministic: the same data and settings propose the same batch.
+  EXPECT_EQ(propose_batch(t, s).points, p.points);
+  // The exceedance criterion picks near the contour mu = t: U = |mu - t| / sigma small.
+  s.criterion = Criterion::kExceedance;
+  s.threshold = 0.5;
+  s.batch = 3;
+  const Proposal q = propose_batch(t, s);
+  ASSERT_EQ(q.points.size(), 3u);
+  EXPECT_LT(q.score.front(), 2.0);  // a point whose side of t is uncertain (|mu - t| < 2 sigma)
+}
+
+// End to end on `flume model ishigami` with x3 fixed (y = sin x1 + 7 sin^2 x2): from 20 runs, batches of 10
+// until the kriging's 5-fold Q2 reaches 0.99; a second invocation finds the target met and runs nothing.
+TEST(Adaptive, CampaignGrowsToTheTargetQ2AndResumes) {
+  const fs::path dir = test_dir();
+  {
+    std::ofstream(dir / "spec.json") << R"({"name": "adapt", "model": "ishigami", "overrides": {"x3": 0},
+      "parameters": [
+        {"path": "x1", "distribution": {"type": "uniform", "lower": -3.141592653589793, "upper": 3.141592653589793}},
+        {"path": "x2", "distribution": {"type": "uniform", "lower": -3.141592653589793, "upper": 3.141592653589793}}],
+      "design": {"type": "lhs", "samples": 20}, "seed": 2})";
+  }
+  const std::vector<std::string> cmd = {FLUME_EXE, "surrogate", "adapt", (dir / "spec.json").string(), "--db",
+                                        (dir / "s.db").string(), "--metric", "y", "--batch", "10", "--max-runs",
+                                        "80", "--target-q2", "0.99", "--workers", "2"};
+  auto r = flume::test::run_command(cmd, dir, 110);
+  ASSERT_EQ(r.rc, 0) << r.err << r.out;
+  EXPECT_NE(r.out.find("target reached"), std::string::npos) << r.out;
+  const auto rec = stored_surrogate((dir / "s.db").string(), "adapt", "y", Kind::kKriging);
+  const json q = json::parse(rec.quality_json);
+  EXPECT_GE(q["q2_cv"].get<double>(), 0.99);
+  const std::size_t n = q["n_train"].get<std::size_t>();
+  EXPECT_LE(n, 80u);
+  EXPECT_GT(n, 20u);
+  EXPECT_EQ((n - 20) % 10, 0u);
+  r = flume::test::run_command(cmd, dir, 110);
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_NE(r.out.find("target reached after 0 batch(es), " + std::to_string(n) + " design points"),
+            std::string::npos)
+      << r.out;
+}
+
+// Forrester, Sobester & Keane (2007) two-fidelity function, x ~ U(0, 1):
+//   f_H = (6x - 2)^2 sin(12x - 4),  f_L = 0.5 f_H + 10 (x - 0.5) - 5
+// E[f_H] = (1/6) [F(u)] from -2 to 4 with F(u) = -u^2 cos(2u)/2 + u sin(2u)/2 + cos(2u)/4 (u = 6x - 2).
+double f_high(double x) { return std::pow(6 * x - 2, 2) * std::sin(12 * x - 4); }
+double f_low(double x) { return 0.5 * f_high(x) + 10 * (x - 0.5) - 5; }
+double exact_mean_high() {
+  auto F = [](double u) { return -u * u * std::cos(2 * u) / 2 + u * std::sin(2 * u) / 2 + std::cos(2 * u) / 4; };
+  return (F(4) - F(-2)) / 6;
+}
+
+// The estimator's variance formula against the spread of the estimate over independent repetitions: 300
+// repetitions estimate a variance to +-8 % (one standard deviation, sqrt(2 / 299)); 30 % is 3.7 of them.
+TEST(Multilevel, VarianceFormulaMatchesRepetitionsAndTheMeanIsUnbiased) {
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> u(0, 1);
+  std::vector<double> estimates;
+  double predicted = 0;
+  for (int rep = 0; rep < 300; ++rep) {
+    TwoLevelSamples s;
+    s.cost_low_s = 1;
+    s.cost_high_s = 10;
+    for (int i = 0; i < 200; ++i) s.low_only.push_back(f_low(u(rng)));
+    for (int i = 0; i < 20; ++i) {
+      const double x = u(rng);
+      s.pair_low.push_back(f_low(x));
+      s.pair_high.push_back(f_high(x));
+    }
+    const auto e = two_level_estimate(s);
+    estimates.push_back(e.mean);
+    predicted += e.variance / 300;
+  }
+  double mean = 0, var = 0;
+  for (double e : estimates) mean += e / estimates.size();
+  for (double e : estimates) var += (e - mean) * (e - mean) / (estimates.size() - 1);
+  EXPECT_NEAR(var / predicted, 1.0, 0.3);
+  EXPECT_NEAR(mean, exact_mean_high(), 4 * std::sqrt(var / estimates.size()));
+}
+
+// From the store: a low campaign of 400 Monte Carlo points and a high one whose 40 points are the first 40 of
+// the same seeded sequence (so they pair); the interval holds the exact mean.
+TEST(Multilevel, PairsTwoCampaignsOfAStore) {
+  const fs::path dir = test_dir();
+  const std::string db = (dir / "s.db").string();
+  auto spec = [](const std::string& name, int n) {
+    return R"({"name": ")" + name + R"(", "model": "ishigami", "parameters": [{"path": "x1", "distribution":
+      {"type": "uniform", "lower": 0, "upper": 1}}], "design": {"type": "monte_carlo", "samples": )" +
+           std::to_string(n) + R"(}, "seed": 7})";
+  };
+  flume::test::make_campaign(db, spec("low", 400), [](const std::vector<double>& x, std::int64_t) {
+    return flume::test::ok_outcome({{"y", f_low(x[0])}});
+  });
+  flume::test::make_campaign(db, spec("high", 40), [](const std::vector<double>& x, std::int64_t) {
+    return flume::test::ok_outcome({{"y", f_high(x[0])}});
+  });
+  const auto s = load_two_levels(db, "low", "high", "y", 1.0, 10.0);
+  ASSERT_EQ(s.pair_low.size(), 40u);
+  EXPECT_EQ(s.low_only.size(), 360u);
+  const auto e = two_level_estimate(s, 0.999);
+  EXPECT_LE(e.lo, exact_mean_high());
+  EXPECT_GE(e.hi, exact_mean_high());
+  EXPECT_DOUBLE_EQ(e.cost_s, 360 * 1.0 + 40 * 11.0);
+  EXPECT_NEAR(e.high_only_cost_s, e.v_high * 10.0 / e.variance, 1e-9 * e.high_only_cost_s);
+  EXPECT_THROW(load_two_levels(db, "low", "low_missing", "y"), flume::InputError);
+}
+
+// A linear model y = a + b t observed with Gaussian noise: under a flat prior the posterior of (a, b) is
+// Gaussian with the least-squares mean and covariance sigma^2 (X^T X)^-1. The misfit's surrogate is fitted on
+// evaluations as an optimizer and its profile would leave them: a coarse grid over the bounds and a finer one
+// around the optimum.
+TEST(Posterior, LinearGaussianModelHasItsAnalyticPosterior) {
+  const int n = 50;
+  const double sigma = 0.1;
+  std::vector<double> t(n), y(n);
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> noise(0, sigma);
+  for (int i = 0; i < n; ++i) {
+    t[i] = i / (n - 1.0);
+    y[i] = 1.0 + 2.0 * t[i] + noise(rng);
+  }
+  double st = 0, stt = 0, sy = 0, sty = 0;
+  for (int i = 0; i < n; ++i) st += t[i], stt += t[i] * t[i], sy += y[i], sty += t[i] * y[i];
+  const double det = n * stt - st * st;
+  const double a_hat = (stt * sy - st * sty) / det, b_hat = (n * sty - st * sy) / det;
+  const double sd_a = sigma * std::sqrt(stt / det), sd_b = sigma * std::sqrt(n / det);
+  auto ssr = [&](double a, double b) {
+    double s = 0;
+    for (int i = 0; i < n; ++i) s += std::pow(y[i] - a - b * t[i], 2);
+    return s;
+  };
+  MisfitData d;
+  d.names = {"a", "b"};
+  d.lower = {0, 1};
+  d.upper = {2, 3};
+  d.n_residuals = n;
+  for (int i = 0; i <= 4; ++i)
+    for (int j = 0; j <= 4; ++j) {
+      d.points.push_back({0.5 * i, 1 + 0.5 * j});
+      d.ssr.push_back(ssr(d.points.back()[0], d.points.back()[1]));
+    }
+  for (int i = -3; i <= 3; ++i)
+    for (int j = -3; j <= 3; ++j) {
+      d.points.push_back({a_hat + 1.5 * i * sd_a, b_hat + 1.5 * j * sd_b});
+      d.ssr.push_back(ssr(d.points.back()[0], d.points.back()[1]));
+    }
+  PosteriorSettings s;
+  s.noise_m = sigma;
+  const Posterior p = misfit_posterior(d, s);
+  ASSERT_EQ(p.parameters.size(), 2u);
+  const double sd[2] = {sd_a, sd_b}, mean[2] = {a_hat, b_hat};
+  for (int j = 0; j < 2; ++j) {
+    const auto& q = p.parameters[j];
+    // MCMC error: 20000 correlated samples are worth a few hundred independent ones (0.1 sd).
+    EXPECT_NEAR(q.mean, mean[j], 0.25 * sd[j]) << q.name;
+    EXPECT_NEAR((q.hi - q.lo) / (2 * 1.959964 * sd[j]), 1.0, 0.15) << q.name;
+  }
+  // Half the noise, half the width.
+  s.noise_m = sigma / 2;
+  const Posterior half = misfit_posterior(d, s);
+  for (int j = 0; j < 2; ++j)
+    EXPECT_NEAR((half.parameters[j].hi - half.parameters[j].lo) / (p.parameters[j].hi - p.parameters[j].lo), 0.5,
+                0.1);
+}
+
+}  // namespace
