@@ -113,9 +113,6 @@ RunOutcome run_scene(const Scene& scene, const SimulationOptions& options, const
     throw InputError(scene.file, "instruments.snapshot_rate_hz",
                      "a checkpointed or resumed run cannot keep snapshots yet (those before the checkpoint would "
                      "be lost): set it to 0 or run without --checkpoint-every/--resume");
-  if (checkpointing && options.backend == Backend::kCuda)
-    throw InputError("--backend", "cuda", "the CUDA backend does not checkpoint yet: run with --backend cpu, or "
-                                          "without --checkpoint-every/--resume");
   std::error_code ec;
   fs::create_directories(out_dir, ec);
   if (ec) throw InputError(out_dir, "--out", "cannot create the output directory: " + ec.message());
