@@ -73,6 +73,11 @@ class StateArchive {
       checkpoint_state(*this, v);
     }
   }
+  // Several values in order, as one call each.
+  template <class... T>
+  void fields(T&... v) {
+    ((*this)(v), ...);
+  }
   void operator()(std::string& s) {
     uint64_t n = s.size();
     (*this)(n);

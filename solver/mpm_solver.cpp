@@ -25,41 +25,25 @@
 #include "solver/debris_coupling.h"
 #include "solver/inflow.h"
 #include "solver/instruments.h"
+#include "solver/mpm/audit.h"
+#include "solver/mpm/blocks_k.h"
+#include "solver/mpm/boundaries.h"
+#include "solver/mpm/diagnostics_k.h"
+#include "solver/mpm/launch.h"
+#include "solver/mpm/node_k.h"
+#include "solver/mpm/particle_k.h"
+#include "solver/mpm/symmetry_zone.h"
+#include "solver/mpm/tiles.h"
 #include "solver/mpm_kernels.h"
 #include "solver/seeding.h"
 #include "solver/simulation.h"
 #include "solver/symmetry.h"
 
 namespace flume {
+namespace mpm {
 namespace {
 
-using mpm::kBlock;
-using mpm::kTile;
-
 constexpr int kPad = kBlock;  // nodes of padding below the domain, so every node index is non-negative
-
-template <int D>
-uint64_t pack_key(const int* b) {
-  uint64_t k = 0;
-  for (int d = 0; d < D; ++d) k = (k << 21) | static_cast<uint64_t>(b[d] & 0x1FFFFF);
-  return k;
-}
-template <int D>
-void unpack_key(uint64_t k, int* b) {
-  for (int d = D - 1; d >= 0; --d) {
-    b[d] = static_cast<int>(k & 0x1FFFFF);
-    k >>= 21;
-  }
-}
-
-std::string fmt_point(const double* x, int dim) {
-  std::ostringstream s;
-  s.precision(4);
-  s << "(";
-  for (int d = 0; d < dim; ++d) s << (d ? ", " : "") << x[d];
-  s << ") m";
-  return s.str();
-}
 
 template <int D, typename T>
 class MpmSolver final : public Simulation {
@@ -112,18 +96,7 @@ class MpmSolver final : public Simulation {
     sort_particles();
     const Energy e = energy();
     energy0_ = e.total();
-    // Slack for the energy audit: MPM dissipates, so the total may only grow by round-off and by the
-    // compression work of the initial loading. 1% of the larger of the initial kinetic energy and the
-    // potential energy of lifting all the water by its own height bounds those by a wide margin, and an
-    // explicit-step blow-up grows exponentially, far past it within a few steps.
-    double zmin = 1e300, zmax = -1e300;
-    for (const auto& w : scene.water) {
-      zmin = std::min(zmin, w.lo[D - 1]);
-      zmax = std::max(zmax, w.hi[D - 1]);
-    }
-    double g = 0;
-    for (int d = 0; d < D; ++d) g += scene.solver.gravity[d] * scene.solver.gravity[d];
-    energy_slack_ = 0.01 * std::max({e.kinetic, mass_ * std::sqrt(g) * (zmax - zmin), 1e-12});
+    energy_slack_ = mpm::energy_slack(scene_, mass_, e.kinetic);
     if (inflow_) energy_slack_ = std::max(energy_slack_, inflow_->energy_scale());
     instruments_.sample(*this, 0.0, 0.0, true);
   }
@@ -188,51 +161,25 @@ class MpmSolver final : public Simulation {
   size_t particle_bytes() const override { return n_ * sizeof(T) * (2 * D + D * D + 2); }
 
   void momentum(double linear[3], double angular[3]) const override {
-    double L[3] = {0, 0, 0}, A[3] = {0, 0, 0};
+    for (int d = 0; d < 3; ++d) linear[d] = angular[d] = 0;
     for (size_t i = 0; i < n_; ++i) {
-      double x[3] = {0, 0, 0}, v[3] = {0, 0, 0};
+      double x[D], v[D], C[D * D];
       for (int d = 0; d < D; ++d) {
         x[d] = x_[d][i];
         v[d] = v_[d][i];
       }
-      const double mp = rho_ * double(vol_[i]);
-      for (int d = 0; d < 3; ++d) L[d] += mp * v[d];
-      // Particle angular momentum: x_p x m v_p plus the APIC spin m sum_i w_ip (x_i - x_p) x v_i (Jiang et al.
-      // 2015, section 5.3). With B_p = C_p D_p, D_p = dx^2/4 I for quadratic splines, the spin is
-      // m dx^2/4 (C_ab - C_ba) over the cyclic (a, b) of each axis, C_ab = dv_a/dx_b: for a rigid rotation
-      // C = [omega]x it is m dx^2/2 omega, turning the same way as the blob.
-      const double s = mp * dx_ * dx_ / 4.0;
-      if constexpr (D == 3) {
-        A[0] += mp * (x[1] * v[2] - x[2] * v[1]) + s * (C_[7][i] - C_[5][i]);
-        A[1] += mp * (x[2] * v[0] - x[0] * v[2]) + s * (C_[2][i] - C_[6][i]);
-        A[2] += mp * (x[0] * v[1] - x[1] * v[0]) + s * (C_[3][i] - C_[1][i]);
-      } else {
-        A[2] += mp * (x[0] * v[1] - x[1] * v[0]) + s * (C_[2][i] - C_[1][i]);
-      }
-    }
-    for (int d = 0; d < 3; ++d) {
-      linear[d] = L[d];
-      angular[d] = A[d];
+      for (int k = 0; k < D * D; ++k) C[k] = C_[k][i];
+      mpm::add_particle_momentum<D>(rho_ * double(vol_[i]), dx_, x, v, C, linear, angular);
     }
   }
 
   void set_rigid_velocity(const double v0[3], const double omega[3], const double centre[3]) override {
     for (size_t i = 0; i < n_; ++i) {
-      double r[3] = {0, 0, 0};
+      double r[D], v[D], C[D * D];
       for (int d = 0; d < D; ++d) r[d] = x_[d][i] - centre[d];
-      if constexpr (D == 3) {
-        v_[0][i] = T(v0[0] + omega[1] * r[2] - omega[2] * r[1]);
-        v_[1][i] = T(v0[1] + omega[2] * r[0] - omega[0] * r[2]);
-        v_[2][i] = T(v0[2] + omega[0] * r[1] - omega[1] * r[0]);
-        // The affine field of a rigid rotation: C = [omega]_x.
-        const double W[9] = {0, -omega[2], omega[1], omega[2], 0, -omega[0], -omega[1], omega[0], 0};
-        for (int k = 0; k < 9; ++k) C_[k][i] = T(W[k]);
-      } else {
-        v_[0][i] = T(v0[0] - omega[2] * r[1]);
-        v_[1][i] = T(v0[1] + omega[2] * r[0]);
-        const double W[4] = {0, -omega[2], omega[2], 0};
-        for (int k = 0; k < 4; ++k) C_[k][i] = T(W[k]);
-      }
+      mpm::rigid_motion<D>(v0, omega, r, v, C);
+      for (int d = 0; d < D; ++d) v_[d][i] = T(v[d]);
+      for (int k = 0; k < D * D; ++k) C_[k][i] = T(C[k]);
     }
     max_speed_ = 0;
     for (size_t i = 0; i < n_; ++i) {
@@ -263,20 +210,10 @@ class MpmSolver final : public Simulation {
     ar(vol_);
     ar(held_);
     ar(tag_);
-    ar(time_);
-    ar(dt_);
-    ar(max_speed_);
-    ar(steps_);
-    ar(energy0_);
-    ar(energy_slack_);
-    ar(last_energy_);
-    ar(mass_);
-    ar(status_);
-    ar(message_);
+    ar.fields(time_, dt_, max_speed_, steps_, energy0_, energy_slack_, last_energy_, mass_, status_, message_);
     // The block each particle was sorted into: between sorts a particle may drift into the next block's tile
     // margin without a re-sort, so its block is not a function of its position.
-    ar(needs_sort_);
-    ar(sort_key_);
+    ar.fields(needs_sort_, sort_key_);
     instruments_.checkpoint(ar);
     ar.expect("inflow", inflow_ ? 1 : 0);
     if (inflow_) inflow_->checkpoint(ar);
@@ -356,50 +293,27 @@ class MpmSolver final : public Simulation {
   }
 
   void setup_boundaries() {
-    for (const auto& b : scene_.boundaries) {
-      Wall w;
-      w.box = b.shape.type == ShapeType::kBox;
-      for (int d = 0; d < D; ++d) {
-        w.ad[d] = w.box ? b.shape.lo[d] : b.shape.point[d];
-        w.bd[d] = w.box ? b.shape.hi[d] : b.shape.normal[d];
-        w.a[d] = T(w.ad[d]);
-        w.b[d] = T(w.bd[d]);
-        w.vb[d] = T(b.velocity[d]);
-      }
-      w.bc = static_cast<mpm::Bc>(static_cast<int>(b.condition));
-      w.mu = T(b.friction);
-      w.subcell_axes = b.subcell_axes;
-      walls_.push_back(w);
-      if (w.bc == mpm::Bc::kSymmetry) {
-        has_sym_ = true;
-        sym_ = symmetry_plane<D>(b, grid_lo_, dx_);
-      }
-    }
+    walls_ = mpm::scene_walls<D, T>(scene_);
+    has_sym_ = mpm::scene_symmetry_plane<D>(scene_, grid_lo_, dx_, sym_);
+    zone_ = mpm::SymmetryZone<D>(sym_);
     if (has_sym_ && debris_)
       throw InputError(scene_.file, "boundaries", "a symmetry plane cannot be used with debris (the bodies would "
                                                   "need their mirror images): model the full span");
-    domain_bc_ = static_cast<mpm::Bc>(static_cast<int>(scene_.domain_walls));
-    domain_mu_ = T(scene_.domain_wall_friction);
+    container_ = mpm::scene_container<D, T>(scene_);
+    subcell_rate0_ = mpm::subcell_rate0(c_, dx_);
     load_impulse_.assign(walls_.size() * D, 0.0);
   }
 
-  int base_node(T x_grid) const { return static_cast<int>(std::floor(x_grid - T(0.5))); }
-
   // Bins particles by the block of their stencil's base node and rebuilds the sparse block lists.
   void sort_particles() {
-    // The work arrays persist between sorts: fresh ones each time cost a page fault per 4 kB touched, which
-    // was 7% of a step's time.
+    // The work arrays persist between sorts: fresh ones each time cost a page fault per 4 kB touched.
     std::vector<uint64_t>& key = sort_key_;
     key.resize(n_);
-#pragma omp parallel for schedule(static)
-    for (size_t i = 0; i < n_; ++i) {
-      int b[D];
-      for (int d = 0; d < D; ++d) {
-        const int node = base_node((x_[d][i] - T(grid_lo_[d])) * inv_dx_);
-        b[d] = node >= 0 ? node / kBlock : 0;
-      }
-      key[i] = pack_key<D>(b);
-    }
+    mpm::parallel_for(n_, [&](size_t i) {
+      T xg[D];
+      for (int d = 0; d < D; ++d) xg[d] = (x_[d][i] - T(grid_lo_[d])) * inv_dx_;
+      key[i] = mpm::particle_block_key<D>(xg);
+    });
     if (!std::is_sorted(key.begin(), key.end())) {
       std::vector<uint32_t>& order = sort_order_;
       order.resize(n_);
@@ -450,7 +364,7 @@ class MpmSolver final : public Simulation {
       unpack_key<D>(k, b);
       for (int o = 0; o < kNbr; ++o) {
         int nb[D];
-        neighbour(b, o, nb);
+        mpm::neighbour_block<D>(b, o, nb);
         g.push_back(pack_key<D>(nb));
       }
     }
@@ -470,7 +384,7 @@ class MpmSolver final : public Simulation {
       unpack_key<D>(pkeys_[p], b);
       for (int o = 0; o < kNbr; ++o) {
         int nb[D];
-        neighbour(b, o, nb);
+        mpm::neighbour_block<D>(b, o, nb);
         p_nbr_[p * kNbr + o] = find(gkeys_, pack_key<D>(nb));
       }
     }
@@ -480,13 +394,13 @@ class MpmSolver final : public Simulation {
       unpack_key<D>(gkeys_[gi], b);
       for (int o = 0; o < kNbr; ++o) {
         int nb[D];
-        neighbour(b, o, nb);
+        mpm::neighbour_block<D>(b, o, nb);
         g_nbr_[gi * kNbr + o] = find(pkeys_, pack_key<D>(nb));
       }
     }
     // Boundaries that can reach each grid block (so the grid update tests only those): counted per block in
-    // parallel, then listed at the blocks' offsets (a serial pass over blocks x walls was 4 % of a step on the
-    // Waseda apron, which re-sorts almost every step).
+    // parallel, then listed at the blocks' offsets (a serial pass over blocks x walls showed in the Waseda
+    // apron's profile, which re-sorts almost every step).
     const auto reaches = [&](size_t gi, size_t w) {
       int b[D];
       unpack_key<D>(gkeys_[gi], b);
@@ -526,14 +440,6 @@ class MpmSolver final : public Simulation {
     needs_sort_ = false;
   }
 
-  // The o-th of the 3^D neighbours of block b (offsets -1, 0, +1 per axis, last axis fastest).
-  static void neighbour(const int* b, int o, int* nb) {
-    for (int d = D - 1; d >= 0; --d) {
-      nb[d] = b[d] + (o % 3) - 1;
-      o /= 3;
-    }
-  }
-
   struct Ghost {
     size_t idx = 0;       // the ghost node
     int offset[D] = {};   // the reflection's offset in nodes, then (after the walls) the mirror node
@@ -542,77 +448,23 @@ class MpmSolver final : public Simulation {
     int wall = -1;        // the scene wall whose load takes the image's push (-1: the domain box)
     double load_weight = 1;  // 1/2 on a symmetry plane (the whole's load there is twice the half's)
   };
-  struct Wall {
-    bool box = true;
-    T a[D], b[D];  // box: lo, hi; half-space: point, normal
-    double ad[D], bd[D];  // the same in double: which grid nodes lie on a wall is decided in double
-    T vb[D];
-    mpm::Bc bc = mpm::Bc::kSeparate;
-    T mu = 0;
-    unsigned subcell_axes = 0;  // mpm::subcell_cover
-  };
+  using Wall = mpm::Wall<D, T>;
   T wall_distance(const Wall& w, const T* x, T* n) const {
-    return w.box ? mpm::box_distance<D>(x, w.a, w.b, n) : mpm::half_space_distance<D>(x, w.a, w.b, n);
-  }
-  // For each node of a particle block's tile: which of the 3^D neighbouring grid blocks holds it, and where.
-  struct TileNode {
-    int block, local;
-  };
-  // A particle block's tile box: the tile nodes its particles' stencils reach, [lo, hi) per axis (tile_box).
-  struct TileBox {
-    int lo[D], hi[D];
-  };
-  static std::vector<TileNode> make_tile_map() {
-    std::vector<TileNode> map(kTileNodes);
-    for (int a = 0; a < kTileNodes; ++a) {
-      int o = 0, local = 0;
-      for (int d = D - 1, r = a, stride = 1, lstride = 1; d >= 0; --d, r /= kTile) {
-        const int ad = r % kTile;
-        const int bo = ad == 0 ? -1 : (ad <= kBlock ? 0 : 1);  // tile index 0 lies in the block below
-        o += (bo + 1) * stride;
-        local += (ad - 1 - kBlock * bo) * lstride;
-        stride *= 3;
-        lstride *= kBlock;
-      }
-      map[a] = {o, local};
+    T a[D], b[D];  // in T, as the node update's reach test always took them
+    for (int d = 0; d < D; ++d) {
+      a[d] = T(w.a[d]);
+      b[d] = T(w.b[d]);
     }
-    return map;
+    return w.box ? mpm::box_distance<D>(x, a, b, n) : mpm::half_space_distance<D>(x, a, b, n);
   }
-
-  // The tile nodes that particle block p's particles reach: the union of their 3^D stencils, [lo, hi) per axis
-  // in tile coordinates. P2G zeroes and fills only these, the grid gather adds only these (the rest of the tile
-  // would add exact zeros) and G2P fetches only these from the grid: a block of a thin sheet (a flow one or two
-  // cells deep) reaches a third of its tile, a full block two thirds of it (a particle sits up to a cell outside
-  // its block, so the tile is kBlock + 4 wide).
+  using TileNode = mpm::TileNode;
+  using TileBox = mpm::TileBox<D>;
   TileBox tile_box(long p, const T* lo_grid, T inv_dx) const {
-    TileBox box;
     int blk[D];
     unpack_key<D>(pkeys_[p], blk);
-    for (int d = 0; d < D; ++d) {
-      const int origin = blk[d] * kBlock - 1;
-      int lo = kTile, hi = 0;
-      const T* xd = x_[d].data();
-      for (uint32_t i = pstart_[p]; i < pstart_[p + 1]; ++i) {
-        T f;
-        const int rel = mpm::stencil_base((xd[i] - lo_grid[d]) * inv_dx, f) - origin;
-        lo = std::min(lo, rel);
-        hi = std::max(hi, rel + 3);
-      }
-      box.lo[d] = std::max(0, lo);
-      box.hi[d] = std::min(kTile, std::max(hi, box.lo[d]));
-    }
-    return box;
-  }
-  // Calls row(a, len) for each row of the box along the last axis: its first tile node and its length.
-  template <typename Row>
-  static void for_each_box_row(const TileBox& box, Row&& row) {
-    const int len = box.hi[D - 1] - box.lo[D - 1];
-    if constexpr (D == 2) {
-      for (int a0 = box.lo[0]; a0 < box.hi[0]; ++a0) row(a0 * kTile + box.lo[1], len);
-    } else {
-      for (int a0 = box.lo[0]; a0 < box.hi[0]; ++a0)
-        for (int a1 = box.lo[1]; a1 < box.hi[1]; ++a1) row((a0 * kTile + a1) * kTile + box.lo[2], len);
-    }
+    const T* x[D];
+    for (int d = 0; d < D; ++d) x[d] = x_[d].data();
+    return mpm::tile_box<D>(blk, x, pstart_[p], pstart_[p + 1], lo_grid, inv_dx);
   }
 
   // P2G: each particle block scatters mass, momentum (with the MLS-MPM stress term) and mass-weighted strain J - 1
@@ -637,15 +489,14 @@ class MpmSolver final : public Simulation {
       T* tile = &tiles_[static_cast<size_t>(p) * kLanes * kTileNodes];
       const TileBox box = tile_box(p, lo_grid, inv_dx);
       tile_box_[p] = box;
-      for_each_box_row(box, [&](int a, int len) { std::fill_n(tile + a * kLanes, len * kLanes, T(0)); });
+      mpm::for_each_box_row<D>(box, [&](int a, int len) { std::fill_n(tile + a * kLanes, len * kLanes, T(0)); });
       int blk[D], origin[D];
       unpack_key<D>(pkeys_[p], blk);
       for (int d = 0; d < D; ++d) origin[d] = blk[d] * kBlock - 1;
       // Two passes per batch of particles. The first computes each particle's weights and what its nodes
       // receive into plain arrays across the batch; the second builds the lane vectors and scatters. The
       // scalar set-up (three fifths of P2G in perf) then runs back to back for 32 particles instead of
-      // queueing behind each one's 27-node scatter: +11 % on a CPU step in double (1 thread). GCC 12
-      // vectorises the pressure loop across particles, not yet the set-up loop.
+      // queueing behind each one's 27-node scatter (docs/solver.md, "Measurements behind the constants").
       for (uint32_t b0 = pstart_[p]; b0 < pstart_[p + 1]; b0 += kBatch) {
         const int nb = static_cast<int>(std::min<uint32_t>(kBatch, pstart_[p + 1] - b0));
         alignas(64) T bw[D][3][kBatch], bat0[kChannels][kBatch], bslope[D][D][kBatch], bp[kBatch];
@@ -667,22 +518,20 @@ class MpmSolver final : public Simulation {
             mpm::bspline_weights(f[d], w);
             for (int c = 0; c < 3; ++c) bw[d][c][j] = w[c];
           }
-          T Cp[D * D], sigma[D * D], A[D * D];
+          T Cp[D * D], vp[D], A[D * D], mom0[D], strain, volume;
           for (int k = 0; k < D * D; ++k) Cp[k] = C_[k][i];
-          const T e = e_[i], V = vol_[i], m = rho * V;
-          mpm::viscous_stress_with_pressure<D>(bp[j], Cp, mu, sigma);
-          for (int k = 0; k < D * D; ++k) A[k] = stress_scale * V * (T(1) + e) * sigma[k] + m * Cp[k];
+          for (int a = 0; a < D; ++a) vp[a] = v_[a][i];
+          const T V = vol_[i], m = rho * V;
+          mpm::p2g_particle<D>(bp[j], Cp, e_[i], V, m, vp, f, xp, dx, mu, stress_scale, slope_h, A, mom0, strain,
+                               volume);
           // What node (base + i) receives, before its weight: the channels at i = 0 plus i_b times slope[b].
-          // Momentum m v + A (x_node - x_p) = m v - A f dx + A i dx.
           for (int a = 0; a < D; ++a) {
-            T sum = m * v_[a][i];
-            for (int b = 0; b < D; ++b) sum -= A[a * D + b] * f[b] * dx;
-            bat0[1 + a][j] = sum;
+            bat0[1 + a][j] = mom0[a];
             for (int b = 0; b < D; ++b) bslope[b][a][j] = A[a * D + b] * dx;
           }
           bat0[0][j] = m;
-          bat0[1 + D][j] = m * (e - mpm::hydrostatic_strain<D>(xp, slope_h));
-          bat0[2 + D][j] = V * (T(1) + e);  // the particle's current volume, for the fill of its nodes
+          bat0[1 + D][j] = strain;
+          bat0[2 + D][j] = volume;
         }
         // The vacuum's hold: an upward force f(t) m |g| on the held water.
         if (!held_.empty())
@@ -736,78 +585,23 @@ class MpmSolver final : public Simulation {
     }
     T v[D];
     for (int d = 0; d < D; ++d) v[d] = acc[1 + d] / m + dt * gravity_[d];
-    uint8_t on_wall = 0;
-    // Ghost nodes (mpm::ghost_half_space): the reflection's offset.
-    Ghost ghost;  // its image reflects the particles' momentum only, not gravity's (mpm::ghost_exchange)
+    // The ghost's image reflects the particles' momentum only, not gravity's (mpm::ghost_exchange).
+    Ghost ghost;
     for (int d = 0; d < D; ++d) ghost.vpre[d] = acc[1 + d] / m;
-    bool ambiguous = false;
-    // Scene boundaries reaching this block.
     double xn[D];
     for (int d = 0; d < D; ++d) xn[d] = grid_lo_[d] + node[d] * dx_;
-    for (uint32_t q = g_bnd_start_[g]; q < g_bnd_start_[g + 1]; ++q) {
-      const Wall& w = walls_[g_bnd_[q]];
-      if (w.bc == mpm::Bc::kSymmetry) continue;  // not a wall (the fold in grid_update)
-      double n[2 * D][D];
-      const int faces = mpm::wall_faces<D>(xn, w.box, w.ad, w.bd, dx_, n);
-      if (!faces) {
-        if (w.subcell_axes) {  // a node partly covered by a face between grid lines
-          double nearest[D];
-          const double cover = mpm::subcell_cover<D>(xn, w.ad, w.bd, dx_, w.subcell_axes, nearest);
-          if (cover > 0) {
-            T before[D], held[D];
-            for (int d = 0; d < D; ++d) before[d] = held[d] = v[d];
-            const int nf = mpm::wall_faces<D>(nearest, w.box, w.ad, w.bd, dx_, n);
-            mpm::apply_wall<D>(held, n, nf, w.vb, w.bc, w.mu);
-            mpm::subcell_drag<D>(v, held, cover, mpm::subcell_rate0(c_, dx_), dt);
-            for (int d = 0; d < D; ++d) my_impulse[g_bnd_[q] * D + d] += load_weight * double(m) * (before[d] - v[d]);
-          }
-        }
-        continue;
-      }
-      on_wall = 1;
-      T before[D];
-      for (int d = 0; d < D; ++d) before[d] = v[d];
-      mpm::apply_wall<D>(v, n, faces, w.vb, w.bc, w.mu);
-      for (int d = 0; d < D; ++d) my_impulse[g_bnd_[q] * D + d] += load_weight * double(m) * (before[d] - v[d]);
-      if (w.bc == mpm::Bc::kSticky) {
-        ambiguous = true;
-      } else {
-        const unsigned axes_before = ghost.axes;
-        if (w.box)
-          mpm::ghost_box<D>(xn, w.ad, w.bd, dx_, ghost.offset, ghost.axes, ambiguous);
-        else
-          mpm::ghost_half_space<D>(xn, w.ad, w.bd, dx_, ghost.offset, ghost.axes, ambiguous);
-        if (ghost.axes != axes_before) ghost.wall = static_cast<int>(g_bnd_[q]);
-      }
-    }
-    if (domain_bc_ == mpm::Bc::kSticky) {
-      for (int d = 0; d < D; ++d)
-        ambiguous |= xn[d] < scene_.domain_lo[d] - mpm::kGhostDepth * dx_ ||
-                     xn[d] > scene_.domain_hi[d] + mpm::kGhostDepth * dx_;
-    } else {
-      mpm::ghost_domain<D>(xn, scene_.domain_lo.data(), scene_.domain_hi.data(), dx_, ghost.offset, ghost.axes,
-                           ambiguous);
-    }
-    if (ghost.axes && !ambiguous) {
+    mpm::GhostSearch<D> found;
+    uint8_t on_wall = mpm::apply_boundaries<D>(xn, m, v, dt, load_weight, dx_, subcell_rate0_, walls_.data(),
+                                               g_bnd_.data() + g_bnd_start_[g],
+                                               static_cast<int>(g_bnd_start_[g + 1] - g_bnd_start_[g]),
+                                               container_, my_impulse, found);
+    if (found.found()) {
       ghost.idx = idx;
       ghost.load_weight = load_weight;
-      for (int d = 0; d < D; ++d) ghost.offset[d] += node[d];  // now the mirror node itself
+      ghost.axes = found.axes;
+      ghost.wall = found.wall;
+      for (int d = 0; d < D; ++d) ghost.offset[d] = found.offset[d] + node[d];  // the mirror node itself
       my_ghosts->push_back(ghost);
-    }
-    // The domain box is a container: nodes on or beyond its faces are walls.
-    for (int d = 0; d < D; ++d) {
-      T n[D] = {};
-      const double xn = grid_lo_[d] + node[d] * dx_;
-      if (xn <= scene_.domain_lo[d] + 1e-6 * dx_) {
-        n[d] = T(1);
-      } else if (xn >= scene_.domain_hi[d] - 1e-6 * dx_) {
-        n[d] = T(-1);
-      } else {
-        continue;
-      }
-      const T zero[D] = {};
-      mpm::project_velocity<D>(v, n, zero, domain_bc_, domain_mu_);
-      on_wall = 1;
     }
     // Debris: the node is a moving-wall node of the box it lies in; its velocity is set after every
     // node is known, by the implicit exchange (debris_coupling.h).
@@ -907,7 +701,7 @@ class MpmSolver final : public Simulation {
             near_debris = r2 <= reach * reach;
           }
         }
-        const int slot = has_sym_ ? sym_slot_[g] : -1;
+        const int slot = has_sym_ ? zone_.slot(g) : -1;
         for (int k = 0; k < kNodes; ++k) {
           int node[D];
           for (int d = D - 1, r = k; d >= 0; --d, r /= kBlock) node[d] = blk[d] * kBlock + r % kBlock;
@@ -924,11 +718,11 @@ class MpmSolver final : public Simulation {
         // the whole's. Each reads its own entry and its mirror's beyond the plane, which nobody writes.
         Lane sign;
         for (int c = 0; c < kLanes; ++c) sign[c] = T(mpm::symmetry_channel_sign(sym_, c));
-        const long nq = static_cast<long>(sym_blocks_.size()) * kNodes;
+        const long nq = static_cast<long>(zone_.entries());
 #pragma omp for schedule(static)
         for (long q = 0; q < nq; ++q) {
           int node[D];
-          const long g = symmetry_node(q, node);
+          const long g = zone_.node(q, gkeys_, node);
           const int k = static_cast<int>(q % kNodes);
           if (!in_symmetry_zone(node[sym_.axis])) continue;  // updated in the loop above
           const int side = mpm::symmetry_side(sym_, node[sym_.axis]);
@@ -937,7 +731,7 @@ class MpmSolver final : public Simulation {
           if (side == 0) {
             a += sign * a;
           } else {
-            const long m = symmetry_entry(node);
+            const long m = zone_.mirror_entry(node, gkeys_);
             if (m >= 0) a += sign * sym_acc_[m];
           }
           // No debris near: a scene with a symmetry plane has none (setup_boundaries).
@@ -954,81 +748,30 @@ class MpmSolver final : public Simulation {
     if (debris_) couple_debris(double(dt));
   }
 
-  // The symmetry plane (mpm::SymmetryPlane). A node within kSymmetryZone cells of it on the modelled side, on it
-  // or beyond it is stored raw and updated after the fold; the particles stay on the modelled side, so only nodes
-  // one cell beyond it receive mass, and their mirrors lie within the zone. The blocks holding such nodes get a
-  // slot each (sym_slot_), their raw nodes a dense entry (slot * kNodes + local): no list to gather or sort.
-  static constexpr int kSymmetryZone = 3;
-  bool in_symmetry_zone(int i) const {
-    return mpm::symmetry_side(sym_, i) >= 0 || std::abs(2 * i - sym_.twice) <= 2 * kSymmetryZone;
-  }
-  // The slots, from the grid blocks: rebuilt with them (build_blocks).
+  bool in_symmetry_zone(int i) const { return zone_.in_zone(i); }
   void index_symmetry_blocks() {
-    const long ngb = static_cast<long>(gkeys_.size());
-    sym_slot_.assign(gkeys_.size(), -1);
-    sym_blocks_.clear();
-    for (long g = 0; g < ngb; ++g) {
-      int blk[D];
-      unpack_key<D>(gkeys_[g], blk);
-      bool touches = false;
-      for (int l = 0; l < kBlock && !touches; ++l) touches = in_symmetry_zone(blk[sym_.axis] * kBlock + l);
-      if (!touches) continue;
-      sym_slot_[g] = static_cast<int>(sym_blocks_.size());
-      sym_blocks_.push_back(g);
-    }
-    sym_acc_.resize(sym_blocks_.size() * kNodes);
-  }
-  // Raw entry q (slot * kNodes + local node): its grid block, returned, and its node coordinates.
-  long symmetry_node(long q, int* node) const {
-    const long g = sym_blocks_[q / kNodes];
-    int blk[D];
-    unpack_key<D>(gkeys_[g], blk);
-    for (int d = D - 1, r = static_cast<int>(q % kNodes); d >= 0; --d, r /= kBlock) node[d] = blk[d] * kBlock + r % kBlock;
-    return g;
-  }
-  // Grid index of a node (global node coordinates), or -1 where no active block holds it.
-  long grid_index(const int* node) const {
-    int blk[D], local = 0;
-    for (int d = 0; d < D; ++d) {
-      if (node[d] < 0) return -1;
-      blk[d] = node[d] / kBlock;
-      local = local * kBlock + node[d] % kBlock;
-    }
-    const auto it = std::lower_bound(gkeys_.begin(), gkeys_.end(), pack_key<D>(blk));
-    if (it == gkeys_.end() || *it != pack_key<D>(blk)) return -1;
-    return static_cast<long>(it - gkeys_.begin()) * kNodes + local;
-  }
-  // The raw entry of a node's mirror across the plane, or -1 where the mirror is outside the zone or no active
-  // block holds it.
-  long symmetry_entry(const int* node) const {
-    int mirror[D];
-    for (int d = 0; d < D; ++d) mirror[d] = node[d];
-    mirror[sym_.axis] = sym_.twice - node[sym_.axis];
-    if (!in_symmetry_zone(mirror[sym_.axis])) return -1;
-    const long gi = grid_index(mirror);
-    if (gi < 0) return -1;
-    const int slot = sym_slot_[gi / kNodes];
-    return slot >= 0 ? static_cast<long>(slot) * kNodes + gi % kNodes : -1;
+    zone_.index(gkeys_);
+    sym_acc_.resize(zone_.entries());
   }
   // After the walls and the ghosts: every node beyond the plane is the reflection of its mirror; one whose mirror
-  // lies outside the zone (more than kSymmetryZone cells beyond, no mass) is emptied.
+  // lies outside the zone (more than SymmetryZone::kZone cells beyond, no mass) is emptied.
   void mirror_beyond_symmetry() {
-    const long nq = static_cast<long>(sym_blocks_.size()) * kNodes;
+    const long nq = static_cast<long>(zone_.entries());
 #pragma omp parallel for schedule(static)
     for (long q = 0; q < nq; ++q) {
       int node[D];
-      const long g = symmetry_node(q, node);
+      const long g = zone_.node(q, gkeys_, node);
       const int k = static_cast<int>(q % kNodes);
       if (mpm::symmetry_side(sym_, node[sym_.axis]) <= 0) continue;
       const size_t idx = static_cast<size_t>(g) * kNodes + k;
-      const long m = symmetry_entry(node);
+      const long m = zone_.mirror_entry(node, gkeys_);
       if (m < 0) {  // nothing on the modelled side within reach: no water here either
         gm_[idx] = ge_[idx] = gfill_[idx] = T(0);
         gwall_[idx] = 0;
         for (int d = 0; d < D; ++d) gv_[d][idx] = T(0);
         continue;
       }
-      const size_t mi = static_cast<size_t>(sym_blocks_[m / kNodes]) * kNodes + m % kNodes;
+      const size_t mi = static_cast<size_t>(zone_.block(m)) * kNodes + m % kNodes;
       gm_[idx] = gm_[mi];
       ge_[idx] = ge_[mi];
       gfill_[idx] = gfill_[mi];
@@ -1061,18 +804,9 @@ class MpmSolver final : public Simulation {
       const Ghost& gh = all_ghosts_[q];
       MirrorChange& c = mirror_dv_[q];
       c.node = kNoMirror;
-      int blk[D];
-      bool ok = true;
-      for (int d = 0; d < D; ++d) {
-        ok &= gh.offset[d] >= 0;
-        blk[d] = gh.offset[d] / kBlock;
-      }
-      if (!ok) continue;
-      const auto it = std::lower_bound(gkeys_.begin(), gkeys_.end(), pack_key<D>(blk));
-      if (it == gkeys_.end() || *it != pack_key<D>(blk)) continue;
-      int local = 0;
-      for (int d = 0; d < D; ++d) local = local * kBlock + gh.offset[d] % kBlock;
-      const size_t mi = static_cast<size_t>(it - gkeys_.begin()) * kNodes + local;
+      const long gi = mpm::grid_index<D>(gkeys_, gh.offset);
+      if (gi < 0) continue;
+      const size_t mi = static_cast<size_t>(gi);
       if (gm_[mi] <= T(0) || gwall_[mi]) continue;
       T vg[D], vm[D], dvg[D];
       for (int d = 0; d < D; ++d) {
@@ -1171,13 +905,18 @@ class MpmSolver final : public Simulation {
     // Locals of the members the particle loop reads: its stores to the particle arrays could alias a member
     // of type T, which the compiler would then reload (and the Tait law's set-up redo) for every particle.
     const mpm::TaitLaw<T> law = law_;
-    const mpm::TaitLaw<double> law_d = law_d_;
-    const T psi = psi_, fill_tol = fill_tolerance_, inv_dx = inv_dx_;
-    const bool has_sym = has_sym_;
-    const mpm::SymmetryPlane sym = sym_;
-    T slope_h[D], lo_grid[D], grav[D];
+    const T inv_dx = inv_dx_;
+    mpm::G2pConstants<D, T> g2p_k;
+    g2p_k.dt = dt;
+    g2p_k.psi = psi_;
+    g2p_k.fill_rate = fill_rate;
+    g2p_k.fill_tol = fill_tolerance_;
+    g2p_k.law_d = law_d_;
+    g2p_k.has_sym = has_sym_;
+    g2p_k.sym = sym_;
+    T lo_grid[D], grav[D];
     for (int d = 0; d < D; ++d) {
-      slope_h[d] = strain_slope_[d];
+      g2p_k.slope[d] = strain_slope_[d];
       lo_grid[d] = T(grid_lo_[d]);
       grav[d] = gravity_[d];
     }
@@ -1200,7 +939,7 @@ class MpmSolver final : public Simulation {
       push_out_.resize(static_cast<size_t>(nblocks) * nbodies * 6);
       push_near_.assign(static_cast<size_t>(nblocks), 0);
     }
-    static const std::vector<TileNode> tile_map = make_tile_map();
+    static const std::vector<TileNode> tile_map = mpm::make_tile_map<D>();
 #pragma omp parallel for schedule(dynamic, 4) reduction(max : vmax2) reduction(+ : ke, pe, el, fill_work) reduction(|| : resort)
     for (long p = 0; p < nblocks; ++p) {
       const bool near_debris = debris_ && block_near_debris(pkeys_[p], 2 * dx_);
@@ -1226,7 +965,7 @@ class MpmSolver final : public Simulation {
         t[D + 2] = free;
         for (int c = D + 3; c < kLanes; ++c) t[c] = T(0);
       };
-      for_each_box_row(tile_box_[p], [&](int a, int len) {
+      mpm::for_each_box_row<D>(tile_box_[p], [&](int a, int len) {
         for (int k = 0; k < len; ++k) fetch(a + k);
       });
       // The stencil weights of a batch of particles first, in a loop of their own; then the gather and update
@@ -1296,26 +1035,12 @@ class MpmSolver final : public Simulation {
         for (int k = 0; k < D * D; ++k) Cn[k] *= cscale;
         T xp[D];
         for (int d = 0; d < D; ++d) xp[d] = x_[d][i];
-        // The grid average leaves out nodes that a wall set: their strain is an average over particles on one
-        // side only, and the discrete equilibrium next to a wall is not the linear field the average
-        // preserves, so mixing them in would drive a slow creep that never settles. The remaining nodes are
-        // renormalised; a particle with no free node in reach keeps its own J (psi = 0).
-        const bool have_grid = wsum > T(1e-3);
-        const T e_grid = (have_grid ? Jg / wsum : T(0)) + mpm::hydrostatic_strain<D>(xp, slope_h);
-        T e = mpm::jbar_update(e_[i], e_grid, mpm::volume_change<D>(Cn, dt), have_grid ? psi : T(0));
-        if (have_grid) {
-          const T corrected = mpm::fill_correction(e, Fg / wsum, fill_rate, fill_tol);
-          if (corrected != e)  // the energy the constraint supplies (what it removes is dissipation)
-            fill_work += std::max(0.0, double(vol_[i]) *
-                                           (law_d.energy_density(double(corrected)) - law_d.energy_density(double(e))));
-          e = corrected;
-        }
+        T e = e_[i];
+        fill_work += mpm::g2p_particle<D>(g2p_k, Jg, Fg, wsum, vol_[i], e, xp, vn, Cn);
         e_[i] = e;
         T v2 = 0, gx = 0;
         bool finite = std::isfinite(e) && e > T(-1);
         bool inside = true;
-        for (int d = 0; d < D; ++d) xp[d] += dt * vn[d];
-        if (has_sym) mpm::symmetry_reflect_particle<D>(sym, xp, vn, Cn);  // carried across: its image instead
         for (int d = 0; d < D; ++d) {
           v_[d][i] = vn[d];
           x_[d][i] = xp[d];
@@ -1370,43 +1095,20 @@ class MpmSolver final : public Simulation {
     needs_sort_ = resort;
     // The volume constraint (mpm::fill_correction) does work on the water that the audit cannot otherwise see:
     // it restores the elastic energy of water that crowded without compressing. What it adds is counted as
-    // supplied energy; what it removes (lowering J of water in tension) is dissipation and is not: crediting
-    // it hid a 2% energy rise at the front of the Martin & Moyce run at dx = a/40.
+    // supplied energy; what it removes (lowering J of water in tension) is dissipation and is not (crediting
+    // it hid an energy rise at a dam-break front: docs/solver.md).
     energy0_ += fill_work;
     const double t_new = time_ + double(dt);
     if (bad != std::numeric_limits<long>::max()) {
       double xp[D];
       for (int d = 0; d < D; ++d) xp[d] = x_[d][bad];
-      std::ostringstream s;
-      s << (bad_kind == 1 ? "non-finite value (NaN/Inf) or non-positive volume ratio J"
-                          : "a particle left the domain")
-        << " at t = " << t_new << " s (step " << steps_ + 1 << ", dt = " << double(dt) << " s), particle " << bad
-        << " at " << fmt_point(xp, D) << "; try a smaller solver.cfl or a finer solver.dx";
-      fail(s.str());
+      fail(mpm::bad_particle_message(bad_kind, t_new, steps_ + 1, double(dt), bad, xp, D));
       return;
     }
     const double e_debris = debris_ ? debris_->energy() : 0.0;
     const double e = ke + pe + el + e_debris;
-    if (e > energy0_ + energy_slack_) {
-      // Where: the fastest particle, found serially (this runs once, when the run stops).
-      size_t fastest = 0;
-      double best = -1;
-      for (size_t i = 0; i < n_; ++i) {
-        double v2 = 0;
-        for (int d = 0; d < D; ++d) v2 += double(v_[d][i]) * v_[d][i];
-        if (v2 > best) {
-          best = v2;
-          fastest = i;
-        }
-      }
-      double xf[D];
-      for (int d = 0; d < D; ++d) xf[d] = x_[d][fastest];
-      std::ostringstream s;
-      s << "energy grew beyond what gravity and forcing supply at t = " << t_new << " s (step " << steps_ + 1
-        << "): total " << e << " J against " << energy0_ << " J initially (max speed " << std::sqrt(vmax2)
-        << " m/s, particle " << fastest << " at " << fmt_point(xf, D) << "); try a smaller solver.cfl";
-      fail(s.str());
-    }
+    if (e > energy0_ + energy_slack_)
+      fail(mpm::energy_growth_message<D>(t_new, steps_ + 1, e, energy0_, max_speed_, x_, v_, n_));
     last_energy_ = {ke, pe, el, e_debris};
   }
 
@@ -1472,17 +1174,16 @@ class MpmSolver final : public Simulation {
   BlockSortWork sort_work_;
   std::vector<T> sort_scratch_;
   std::vector<Wall> walls_;
-  mpm::Bc domain_bc_ = mpm::Bc::kSeparate;
-  T domain_mu_ = 0;
+  mpm::Container<D, T> container_;  // the domain box
+  double subcell_rate0_ = 0;         // mpm::subcell_drag's rate
   std::vector<double> load_impulse_;
   std::unique_ptr<DebrisCoupling> debris_;
   std::unique_ptr<InflowBoundary<D, T>> inflow_;
   std::vector<T> tag_;  // the inflow's buffer particles (1) and free water (0); empty without an inflow
   std::vector<std::vector<Ghost>> ghosts_;  // per thread: this step's ghost nodes (reflect_ghosts)
   std::vector<Ghost> all_ghosts_;            // all of them, in node order
-  std::vector<int> sym_slot_;     // per grid block: its slot among the blocks near the symmetry plane, or -1
-  std::vector<long> sym_blocks_;  // per slot: the grid block
-  std::vector<Lane> sym_acc_;     // per slot and local node: this step's raw lanes (updated after the fold)
+  mpm::SymmetryZone<D> zone_;  // the nodes near the symmetry plane, stored raw and updated after the fold
+  std::vector<Lane> sym_acc_;  // per zone entry: this step's raw lanes
   bool has_sym_ = false;
   mpm::SymmetryPlane sym_;
   struct MirrorChange {
@@ -1498,8 +1199,8 @@ class MpmSolver final : public Simulation {
   // Nodes up to one cell outside a box are its moving-wall nodes: then a water particle touching the box puts
   // (nearly) all its weight on them (quadratic B-splines reach 1.5 cells; nodes 1-1.5 cells away carry at most
   // 1/8), so the box feels the water's full pressure. With only the nodes inside the box, the share is that
-  // of the face's position between nodes, 1/2 on average: measured, a 419 kg/m^3 cube then floated 2.5 cells
-  // too deep, against 0.3 cells with this band (tests/solver/test_debris.cpp).
+  // of the face's position between nodes, 1/2 on average, and a floating box sat too deep (docs/solver.md;
+  // tests/solver/test_debris.cpp).
   static constexpr double coupling_band_ = 1.0;
   bool needs_sort_ = true;
   double time_ = 0, dt_ = 0, max_speed_ = 0;
@@ -1511,6 +1212,9 @@ class MpmSolver final : public Simulation {
 };
 
 }  // namespace
+}  // namespace mpm
+
+using mpm::MpmSolver;
 
 std::unique_ptr<Simulation> make_cpu_simulation(const Scene& scene, const SimulationOptions& options) {
   const bool f = scene.solver.precision == Precision::kFloat;

@@ -166,9 +166,6 @@ RunOutcome run_scene(const Scene& scene, const SimulationOptions& options, const
                      bool progress, const CheckpointOptions& checkpoints, double flush_every_s) {
   namespace fs = std::filesystem;
   const bool checkpointing = checkpoints.every_s > 0 || checkpoints.resume;
-  if (checkpointing && options.backend == Backend::kCuda)
-    throw InputError("--backend", "cuda", "the CUDA backend does not checkpoint yet: run with --backend cpu, or "
-                                          "without --checkpoint-every/--resume");
   std::error_code ec;
   fs::create_directories(out_dir, ec);
   if (ec) throw InputError(out_dir, "--out", "cannot create the output directory: " + ec.message());

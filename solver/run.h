@@ -36,7 +36,7 @@ int stop_signal();  // the signal that asked the run to stop, or 0
 // are snapshots) and OUT_DIR/run.json. `progress` prints a line per simulated tenth of the run to stderr.
 // With checkpoints, a run killed at any point resumes from its last checkpoint (`resume`) and finishes as the
 // uninterrupted run would; a finished run resumes to a later end time. Scenes with snapshots are refused
-// (the snapshots before the checkpoint would be lost), as is the CUDA backend.
+// (the snapshots before the checkpoint would be lost).
 RunOutcome run_scene(const Scene& scene, const SimulationOptions& options, const std::string& out_dir,
                      bool progress = false, const CheckpointOptions& checkpoints = {},
                      double flush_every_s = kDefaultFlushEvery_s);

@@ -40,6 +40,7 @@
 #include <cfloat>
 #include <cmath>
 #include <cstdint>
+#include <memory>
 #include <sstream>
 #include <vector>
 
@@ -47,30 +48,30 @@
 #include <cuda_runtime.h>
 #endif
 
+#include "solver/checkpoint.h"
 #include "solver/cuda/mpm_cuda.h"
+#include "solver/inflow.h"
 #include "solver/instruments.h"
+#include "solver/mpm/audit.h"
+#include "solver/mpm/blocks_k.h"
+#include "solver/mpm/boundaries.h"
+#include "solver/mpm/diagnostics_k.h"
+#include "solver/mpm/launch.h"
+#include "solver/mpm/node_k.h"
+#include "solver/mpm/particle_k.h"
 #include "solver/mpm_kernels.h"
 #include "solver/seeding.h"
 #include "solver/simulation.h"
 #include "solver/symmetry.h"
 
 namespace flume {
+namespace mpm {
 namespace {
 
 namespace thr = THRUST_NS_QUALIFIER;
 using mpm::kBlock;
 
 constexpr int kPad = kBlock;  // nodes of padding below the domain, as on the CPU
-
-// Plain adds in the sequential emulation, hardware atomics on the device (double atomics need sm_60+).
-template <typename T>
-FLUME_HD void atomic_add(T* a, T v) {
-#if defined(__CUDA_ARCH__)
-  atomicAdd(a, v);
-#else
-  *a += v;
-#endif
-}
 
 FLUME_HD bool is_finite(double v) {
 #if defined(__CUDA_ARCH__)
@@ -80,31 +81,11 @@ FLUME_HD bool is_finite(double v) {
 #endif
 }
 
-// Block keys: 21 bits per axis, the last axis least significant (the CPU's packing, so blocks sort alike).
-template <int D>
-FLUME_HD uint64_t pack_key(const int* b) {
-  uint64_t k = 0;
-  for (int d = 0; d < D; ++d) k = (k << 21) | static_cast<uint64_t>(b[d] & 0x1FFFFF);
-  return k;
-}
-template <int D>
-FLUME_HD void unpack_key(uint64_t k, int* b) {
-  for (int d = D - 1; d >= 0; --d) {
-    b[d] = static_cast<int>(k & 0x1FFFFF);
-    k >>= 21;
-  }
-}
+using mpm::pack_key;
+using mpm::unpack_key;
 
 template <int D, typename T>
-struct Wall {
-  int box = 1;
-  double a[D],
-      b[D];  // box: lo, hi; half-space: point, normal. Node-in-wall is decided in double (as on the CPU).
-  T vb[D];
-  int bc = 0;  // mpm::Bc
-  T mu = 0;
-  unsigned subcell_axes = 0;  // mpm::subcell_cover
-};
+using Wall = mpm::Wall<D, T>;
 
 // Everything the kernels read, by value: raw device pointers and the scene's constants.
 template <int D, typename T>
@@ -143,11 +124,10 @@ struct View {
   mpm::TaitLaw<double> law_d;  // the energy audit's, in double
   double rho_d;
   T grid_lo[D], gravity[D], strain_slope[D];
-  double dx_d, grid_lo_d[D], domain_lo[D], domain_hi[D];
+  double dx_d, grid_lo_d[D];
   const Wall<D, T>* walls;
   int n_walls;
-  int domain_bc;
-  T domain_mu;
+  mpm::Container<D, T> container;  // the domain box
   double* impulse;  // walls x D, or null when no load cell reads it
 
   // Global node coordinates of grid index idx.
@@ -164,22 +144,7 @@ struct View {
 
   // Grid index of node `node` (global node coordinates) by a binary search of the sorted grid blocks; -1 where
   // no block holds it.
-  FLUME_HD int64_t grid_index(const int* node) const {
-    int blk[D], local = 0;
-    for (int d = 0; d < D; ++d) {
-      if (node[d] < 0) return -1;
-      blk[d] = node[d] / kBlock;
-      local = local * kBlock + node[d] % kBlock;
-    }
-    const uint64_t key = pack_key<D>(blk);
-    size_t lo = 0, hi = nodes / kNodes;
-    while (lo < hi) {
-      const size_t mid = (lo + hi) / 2;
-      if (gkeys[mid] < key) lo = mid + 1; else hi = mid;
-    }
-    if (lo == nodes / kNodes || gkeys[lo] != key) return -1;
-    return static_cast<int64_t>(lo * kNodes + local);
-  }
+  FLUME_HD int64_t grid_index(const int* node) const { return mpm::node_index<D>(gkeys, nodes / kNodes, node); }
 
   // Grid index of node `node` (global node coordinates) seen from particle block `pb`: the node lies in one
   // of the block's 3^D neighbours because a particle is re-sorted before its stencil leaves them.
@@ -199,12 +164,9 @@ struct SortKey {
   View<D, T> s;
   uint64_t* key;
   FLUME_HD void operator()(size_t i) const {
-    int b[D];
-    for (int d = 0; d < D; ++d) {
-      const int node = static_cast<int>(std::floor((s.x[d][i] - s.grid_lo[d]) * s.inv_dx - T(0.5)));
-      b[d] = node >= 0 ? node / kBlock : 0;
-    }
-    key[i] = pack_key<D>(b);
+    T xg[D];
+    for (int d = 0; d < D; ++d) xg[d] = (s.x[d][i] - s.grid_lo[d]) * s.inv_dx;
+    key[i] = mpm::particle_block_key<D>(xg);
   }
 };
 
@@ -217,12 +179,9 @@ struct NeighbourKey {
     constexpr int kNbr = mpm::Pow<D>::of(3);
     int b[D];
     unpack_key<D>(pkeys[j / kNbr], b);
-    int o = static_cast<int>(j % kNbr);
-    for (int d = D - 1; d >= 0; --d) {
-      b[d] += (o % 3) - 1;
-      o /= 3;
-    }
-    out[j] = pack_key<D>(b);
+    int nb[D];
+    mpm::neighbour_block<D>(b, static_cast<int>(j % kNbr), nb);
+    out[j] = pack_key<D>(nb);
   }
 };
 
@@ -245,22 +204,15 @@ struct P2G {
       base[d] = mpm::stencil_base(xg, f[d]);
       mpm::bspline_weights(f[d], w[d]);
     }
-    T Cp[D * D], sigma[D * D], A[D * D];
+    T Cp[D * D], vp[D], xp[D], A[D * D], mom0[D], mJ, vol;
     for (int k = 0; k < D * D; ++k) Cp[k] = s.C[k][i];
-    const T e = s.e[i];
-    mpm::fluid_stress<D>(e, Cp, s.law, s.mu, sigma);
-    for (int k = 0; k < D * D; ++k) A[k] = stress_scale * V * (T(1) + e) * sigma[k] + m * Cp[k];
-    // Momentum carried to node (base + off): m v + A (off - f) dx, split into a constant and a linear part.
-    T mom0[D], xp[D];
     for (int a = 0; a < D; ++a) {
-      T sum = m * s.v[a][i];
-      for (int b = 0; b < D; ++b) sum -= A[a * D + b] * f[b] * dx;
-      mom0[a] = sum;
+      vp[a] = s.v[a][i];
       xp[a] = s.x[a][i];
     }
+    mpm::p2g_particle<D>(s.law.pressure(s.e[i]), Cp, s.e[i], V, m, vp, f, xp, dx, s.mu, stress_scale, s.strain_slope,
+                         A, mom0, mJ, vol);
     if (s.held) mom0[D - 1] += s.held[i] * lift * m;
-    const T mJ = m * (e - mpm::hydrostatic_strain<D>(xp, s.strain_slope));
-    const T vol = V * (T(1) + e);
     constexpr int kStencil = mpm::Pow<D>::of(3);
     for (int q = 0; q < kStencil; ++q) {
       int off[D], node[D];
@@ -269,14 +221,14 @@ struct P2G {
       for (int d = 1; d < D; ++d) wt *= w[d][off[d]];
       for (int d = 0; d < D; ++d) node[d] = base[d] + off[d];
       const size_t idx = s.node_index(pb, blk, node);
-      atomic_add(&s.grid[idx], wt * m);
+      mpm::accumulate(&s.grid[idx], wt * m);
       for (int a = 0; a < D; ++a) {
         T mom = mom0[a];
         for (int b = 0; b < D; ++b) mom += A[a * D + b] * (T(off[b]) * dx);
-        atomic_add(&s.grid[(1 + a) * s.nodes + idx], wt * mom);
+        mpm::accumulate(&s.grid[(1 + a) * s.nodes + idx], wt * mom);
       }
-      atomic_add(&s.grid[(1 + D) * s.nodes + idx], wt * mJ);
-      atomic_add(&s.grid[(2 + D) * s.nodes + idx], wt * vol);
+      mpm::accumulate(&s.grid[(1 + D) * s.nodes + idx], wt * mJ);
+      mpm::accumulate(&s.grid[(2 + D) * s.nodes + idx], wt * vol);
     }
   }
 };
@@ -349,84 +301,24 @@ struct GridUpdate {
     const double load_weight = sym_side == 0 ? 0.5 : 1.0;  // a load on the plane is half the whole's
     T v[D];
     for (int d = 0; d < D; ++d) v[d] = s.grid[(1 + d) * s.nodes + idx] / m + dt * s.gravity[d];
-    uint8_t on_wall = 0;
     double xn[D];
     for (int d = 0; d < D; ++d) xn[d] = s.grid_lo_d[d] + node[d] * s.dx_d;
-    int mirror[D] = {};
-    unsigned axes = 0;
-    bool ambiguous = false;
-    int ghost_wall = -1;
     // The particles' momentum alone, before gravity and the walls: what a ghost's image reflects (mpm::ghost_exchange).
     for (int d = 0; d < D; ++d) s.ghost_dv[d * s.nodes + idx] = s.grid[(1 + d) * s.nodes + idx] / m;
-    for (int k = 0; k < s.n_walls; ++k) {
-      const Wall<D, T>& w = s.walls[k];
-      if (static_cast<mpm::Bc>(w.bc) == mpm::Bc::kSymmetry) continue;  // not a wall (SymmetryFold)
-      double n[2 * D][D];
-      const int faces = mpm::wall_faces<D>(xn, w.box != 0, w.a, w.b, s.dx_d, n);
-      if (!faces) {
-        if (w.subcell_axes) {  // a node partly covered by a face between grid lines (MpmSolver::update_node)
-          double nearest[D];
-          const double cover = mpm::subcell_cover<D>(xn, w.a, w.b, s.dx_d, w.subcell_axes, nearest);
-          if (cover > 0) {
-            T before[D], held[D];
-            for (int d = 0; d < D; ++d) before[d] = held[d] = v[d];
-            const int nf = mpm::wall_faces<D>(nearest, w.box != 0, w.a, w.b, s.dx_d, n);
-            mpm::apply_wall<D>(held, n, nf, w.vb, static_cast<mpm::Bc>(w.bc), w.mu);
-            mpm::subcell_drag<D>(v, held, cover, s.subcell_rate, dt);
-            if (s.impulse)
-              for (int d = 0; d < D; ++d)
-                atomic_add(&s.impulse[k * D + d], load_weight * double(m) * (before[d] - v[d]));
-          }
-        }
-        continue;
-      }
-      on_wall = 1;
-      T before[D];
-      for (int d = 0; d < D; ++d) before[d] = v[d];
-      mpm::apply_wall<D>(v, n, faces, w.vb, static_cast<mpm::Bc>(w.bc), w.mu);
-      if (s.impulse)
-        for (int d = 0; d < D; ++d) atomic_add(&s.impulse[k * D + d], load_weight * double(m) * (before[d] - v[d]));
-      if (static_cast<mpm::Bc>(w.bc) == mpm::Bc::kSticky) {
-        ambiguous = true;
-      } else {
-        const unsigned axes_before = axes;
-        if (w.box)
-          mpm::ghost_box<D>(xn, w.a, w.b, s.dx_d, mirror, axes, ambiguous);
-        else
-          mpm::ghost_half_space<D>(xn, w.a, w.b, s.dx_d, mirror, axes, ambiguous);
-        if (axes != axes_before) ghost_wall = k;
-      }
-    }
-    if (static_cast<mpm::Bc>(s.domain_bc) == mpm::Bc::kSticky) {
-      for (int d = 0; d < D; ++d)
-        ambiguous = ambiguous || xn[d] < s.domain_lo[d] - mpm::kGhostDepth * s.dx_d ||
-                    xn[d] > s.domain_hi[d] + mpm::kGhostDepth * s.dx_d;
-    } else {
-      mpm::ghost_domain<D>(xn, s.domain_lo, s.domain_hi, s.dx_d, mirror, axes, ambiguous);
-    }
+    mpm::GhostSearch<D> found;
+    const bool on_wall = mpm::apply_boundaries<D>(xn, m, v, dt, load_weight, s.dx_d, s.subcell_rate, s.walls, nullptr,
+                                                  s.n_walls, s.container, s.impulse, found);
     s.ghost_mirror[idx] = -1;
-    if (axes && !ambiguous) {
-      for (int d = 0; d < D; ++d) mirror[d] += node[d];
+    if (found.found()) {
+      int mirror[D];
+      for (int d = 0; d < D; ++d) mirror[d] = found.offset[d] + node[d];
       s.ghost_mirror[idx] = s.grid_index(mirror);
-      s.ghost_axes[idx] = static_cast<uint8_t>(axes);
-      s.ghost_wall[idx] = ghost_wall;
-    }
-    for (int d = 0; d < D; ++d) {
-      T n[D] = {};
-      if (xn[d] <= s.domain_lo[d] + 1e-6 * s.dx_d) {
-        n[d] = T(1);
-      } else if (xn[d] >= s.domain_hi[d] - 1e-6 * s.dx_d) {
-        n[d] = T(-1);
-      } else {
-        continue;
-      }
-      const T zero[D] = {};
-      mpm::project_velocity<D>(v, n, zero, static_cast<mpm::Bc>(s.domain_bc), s.domain_mu);
-      on_wall = 1;
+      s.ghost_axes[idx] = static_cast<uint8_t>(found.axes);
+      s.ghost_wall[idx] = found.wall;
     }
     s.grid[(1 + D) * s.nodes + idx] /= m;
     s.grid[(2 + D) * s.nodes + idx] *= s.inv_cell_volume;  // the node's fill (mpm::fill_correction)
-    s.gwall[idx] = on_wall;
+    s.gwall[idx] = on_wall ? 1 : 0;
     for (int d = 0; d < D; ++d) s.grid[(1 + d) * s.nodes + idx] = v[d];
   }
 };
@@ -473,10 +365,10 @@ struct GhostMirrorUpdate {
       if (mpm::symmetry_side(s.sym, node[s.sym.axis]) == 0) load_weight = 0.5;
     }
     for (int d = 0; d < D; ++d) {
-      atomic_add(&s.grid[(1 + d) * s.nodes + mi], s.ghost_dv[d * s.nodes + idx]);
+      mpm::accumulate(&s.grid[(1 + d) * s.nodes + mi], s.ghost_dv[d * s.nodes + idx]);
       // The normal part (the image's push) is the wall's load. The mirror's mass is read before any change.
       if (s.impulse && wall >= 0 && (s.ghost_axes[idx] & (1u << d)))
-        atomic_add(&s.impulse[wall * D + d], -load_weight * double(s.grid[mi]) * double(s.ghost_dv[d * s.nodes + idx]));
+        mpm::accumulate(&s.impulse[wall * D + d], -load_weight * double(s.grid[mi]) * double(s.ghost_dv[d * s.nodes + idx]));
     }
   }
 };
@@ -486,8 +378,7 @@ struct GhostMirrorUpdate {
 template <int D, typename T>
 struct G2P {
   View<D, T> s;
-  T dt;
-  T fill_rate;
+  mpm::G2pConstants<D, T> g2p;
   FLUME_HD void operator()(size_t i) const {
     const T dx = s.dx;
     const T cscale = T(4) * s.inv_dx * s.inv_dx;
@@ -526,24 +417,10 @@ struct G2P {
       wsum += wj;
     }
     for (int k = 0; k < D * D; ++k) Cn[k] *= cscale;
-    T xp[D];
+    T xp[D], e = s.e[i];
     for (int d = 0; d < D; ++d) xp[d] = s.x[d][i];
-    const bool have_grid = wsum > T(1e-3);
-    const T e_grid = (have_grid ? Jg / wsum : T(0)) + mpm::hydrostatic_strain<D>(xp, s.strain_slope);
-    T e = mpm::jbar_update(s.e[i], e_grid, mpm::volume_change<D>(Cn, dt), have_grid ? s.psi : T(0));
-    double work = 0;
-    if (have_grid) {
-      const T corrected = mpm::fill_correction(e, Fg / wsum, fill_rate, s.fill_tol);
-      if (corrected != e) {  // what the constraint supplies (what it removes is dissipation): MpmSolver::g2p
-        work = double(s.vol[i]) * (s.law_d.energy_density(double(corrected)) - s.law_d.energy_density(double(e)));
-        work = work > 0.0 ? work : 0.0;
-      }
-      e = corrected;
-    }
-    s.fill_work[i] = work;
+    s.fill_work[i] = mpm::g2p_particle<D>(g2p, Jg, Fg, wsum, s.vol[i], e, xp, vn, Cn);
     s.e[i] = e;
-    for (int d = 0; d < D; ++d) xp[d] += dt * vn[d];
-    if (s.has_sym) mpm::symmetry_reflect_particle<D>(s.sym, xp, vn, Cn);  // carried across: its image instead
     for (int d = 0; d < D; ++d) {
       s.v[d][i] = vn[d];
       s.x[d][i] = xp[d];
@@ -613,15 +490,6 @@ struct AuditParticle {
   }
 };
 
-std::string fmt_point(const double* x, int dim) {
-  std::ostringstream s;
-  s.precision(4);
-  s << "(";
-  for (int d = 0; d < dim; ++d) s << (d ? ", " : "") << x[d];
-  s << ") m";
-  return s.str();
-}
-
 template <typename T>
 T* raw(thr::device_vector<T>& v) {
   return thr::raw_pointer_cast(v.data());
@@ -650,19 +518,19 @@ class MpmCuda final : public Simulation {
     for (int d = 0; d < D; ++d) strain_slope_[d] = T(-f.density * scene.solver.gravity[d] / f.bulk_modulus);
     c_ = mpm::sound_speed(f.bulk_modulus, f.density);
     seed_particles();
+    if (scene.inflow.present) {  // the buffer of the inflow boundary (solver/inflow.h), on host arrays
+      to_host();
+      inflow_ = std::make_unique<InflowBoundary<D, T>>(scene_, spacing_, host_arrays());
+      inflow_->seed();
+      to_device();
+      mass_ = water_mass(h_.vol, rho_);
+    }
     setup_boundaries();
     sort_particles();
     const Energy e = energy();
     energy0_ = e.total();
-    // The CPU backend's slack for the energy audit (see MpmSolver's constructor).
-    double zmin = 1e300, zmax = -1e300;
-    for (const auto& w : scene.water) {
-      zmin = std::min(zmin, w.lo[D - 1]);
-      zmax = std::max(zmax, w.hi[D - 1]);
-    }
-    double g = 0;
-    for (int d = 0; d < D; ++d) g += scene.solver.gravity[d] * scene.solver.gravity[d];
-    energy_slack_ = 0.01 * std::max({e.kinetic, mass_ * std::sqrt(g) * (zmax - zmin), 1e-12});
+    energy_slack_ = mpm::energy_slack(scene_, mass_, e.kinetic);
+    if (inflow_) energy_slack_ = std::max(energy_slack_, inflow_->energy_scale());
     instruments_.sample(*this, 0.0, 0.0, true);
   }
 
@@ -679,22 +547,22 @@ class MpmCuda final : public Simulation {
     const V s = view();
     thr::fill(thr::device, grid_.begin(), grid_.end(), T(0));
     if (has_loads_) thr::fill(thr::device, impulse_.begin(), impulse_.end(), 0.0);
-    thr::counting_iterator<size_t> first(0);
     // The vacuum's hold: an upward force f(t) m |g| on the held water (as MpmSolver::p2g).
     const T lift = T(double(dt) * scene_.basin.forcing.hold(time_) * std::fabs(scene_.solver.gravity[D - 1]));
-    thr::for_each(thr::device, first, first + n_, P2G<D, T>{s, T(dt), lift});
-    if (s.has_sym) thr::for_each(thr::device, first, first + s.nodes, SymmetryFold<D, T>{s});
-    thr::for_each(thr::device, first, first + s.nodes, GridUpdate<D, T>{s, T(dt)});
-    thr::for_each(thr::device, first, first + s.nodes, GhostExchange<D, T>{s});
-    thr::for_each(thr::device, first, first + s.nodes, GhostMirrorUpdate<D, T>{s});
-    if (s.has_sym) thr::for_each(thr::device, first, first + s.nodes, SymmetryMirror<D, T>{s});
+    mpm::parallel_for(n_, P2G<D, T>{s, T(dt), lift});
+    if (s.has_sym) mpm::parallel_for(s.nodes, SymmetryFold<D, T>{s});
+    mpm::parallel_for(s.nodes, GridUpdate<D, T>{s, T(dt)});
+    mpm::parallel_for(s.nodes, GhostExchange<D, T>{s});
+    mpm::parallel_for(s.nodes, GhostMirrorUpdate<D, T>{s});
+    if (s.has_sym) mpm::parallel_for(s.nodes, SymmetryMirror<D, T>{s});
     if (has_loads_) thr::copy(impulse_.begin(), impulse_.end(), load_impulse_.begin());
-    thr::for_each(thr::device, first, first + n_, G2P<D, T>{s, T(dt), T(mpm::fill_rate(dt, c_, dx_))});
+    mpm::parallel_for(n_, G2P<D, T>{s, g2p_constants(s, T(dt))});
     host_fresh_ = false;
     audit(T(dt));
     time_ += dt;
     dt_ = dt;
     ++steps_;
+    if (inflow_ && status_ == RunStatus::kRunning) apply_inflow(time_ - dt, time_);
     if (status_ == RunStatus::kUnstable) {
       instruments_.sample(*this, time_, dt, true);
       return status_;
@@ -749,27 +617,15 @@ class MpmCuda final : public Simulation {
       C[k].resize(n_);
       thr::copy(C_[k].begin(), C_[k].end(), C[k].begin());
     }
-    double L[3] = {0, 0, 0}, A[3] = {0, 0, 0};
+    for (int d = 0; d < 3; ++d) linear[d] = angular[d] = 0;
     for (size_t i = 0; i < n_; ++i) {
-      double x[3] = {0, 0, 0}, v[3] = {0, 0, 0};
+      double x[D], v[D], Cp[D * D];
       for (int d = 0; d < D; ++d) {
         x[d] = hx_[d][i];
         v[d] = hv_[d][i];
       }
-      const double mp = rho_ * double(hvol_[i]);
-      const double s = mp * dx_ * dx_ / 4.0;  // APIC spin, as MpmSolver::momentum (Jiang et al. 2015, eq. 26)
-      for (int d = 0; d < 3; ++d) L[d] += mp * v[d];
-      if constexpr (D == 3) {
-        A[0] += mp * (x[1] * v[2] - x[2] * v[1]) + s * (C[5][i] - C[7][i]);
-        A[1] += mp * (x[2] * v[0] - x[0] * v[2]) + s * (C[6][i] - C[2][i]);
-        A[2] += mp * (x[0] * v[1] - x[1] * v[0]) + s * (C[1][i] - C[3][i]);
-      } else {
-        A[2] += mp * (x[0] * v[1] - x[1] * v[0]) + s * (C[1][i] - C[2][i]);
-      }
-    }
-    for (int d = 0; d < 3; ++d) {
-      linear[d] = L[d];
-      angular[d] = A[d];
+      for (int k = 0; k < D * D; ++k) Cp[k] = C[k][i];
+      mpm::add_particle_momentum<D>(rho_ * double(hvol_[i]), dx_, x, v, Cp, linear, angular);
     }
   }
 
@@ -778,20 +634,11 @@ class MpmCuda final : public Simulation {
     std::vector<T> C[D * D];
     for (int k = 0; k < D * D; ++k) C[k].resize(n_);
     for (size_t i = 0; i < n_; ++i) {
-      double r[3] = {0, 0, 0};
+      double r[D], v[D], Cp[D * D];
       for (int d = 0; d < D; ++d) r[d] = hx_[d][i] - centre[d];
-      if constexpr (D == 3) {
-        hv_[0][i] = T(v0[0] + omega[1] * r[2] - omega[2] * r[1]);
-        hv_[1][i] = T(v0[1] + omega[2] * r[0] - omega[0] * r[2]);
-        hv_[2][i] = T(v0[2] + omega[0] * r[1] - omega[1] * r[0]);
-        const double W[9] = {0, -omega[2], omega[1], omega[2], 0, -omega[0], -omega[1], omega[0], 0};
-        for (int k = 0; k < 9; ++k) C[k][i] = T(W[k]);
-      } else {
-        hv_[0][i] = T(v0[0] - omega[2] * r[1]);
-        hv_[1][i] = T(v0[1] + omega[2] * r[0]);
-        const double W[4] = {0, -omega[2], omega[2], 0};
-        for (int k = 0; k < 4; ++k) C[k][i] = T(W[k]);
-      }
+      mpm::rigid_motion<D>(v0, omega, r, v, Cp);
+      for (int d = 0; d < D; ++d) hv_[d][i] = T(v[d]);
+      for (int k = 0; k < D * D; ++k) C[k][i] = T(Cp[k]);
     }
     max_speed_ = 0;
     for (size_t i = 0; i < n_; ++i) {
@@ -803,6 +650,45 @@ class MpmCuda final : public Simulation {
     for (int k = 0; k < D * D; ++k) thr::copy(C[k].begin(), C[k].end(), C_[k].begin());
     energy0_ = energy().total();
     energy_slack_ = std::max(energy_slack_, 0.01 * energy().kinetic);
+  }
+
+  // As MpmSolver::checkpoint: everything a step reads that an earlier step wrote, the particles through the host,
+  // and the block each particle was last sorted into (between sorts a particle may drift into the next block's
+  // tile margin without a re-sort, and the sum order of P2G follows the particle order): the block lists and the
+  // grid are rebuilt from those, so a resumed run repeats the uninterrupted one step for step.
+  void checkpoint(StateArchive& ar) override {
+    ar.section(std::string("mpm cuda ") + std::to_string(D) + "D " + (sizeof(T) == 4 ? "float" : "double"));
+    for (int d = 0; d < D; ++d) {
+      archive(ar, x_[d]);
+      archive(ar, v_[d]);
+    }
+    for (auto& c : C_) archive(ar, c);
+    archive(ar, e_);
+    archive(ar, vol_);
+    archive(ar, held_);
+    archive(ar, tag_);
+    archive(ar, keys_);
+    ar.fields(time_, dt_, max_speed_, steps_, energy0_, energy_slack_, last_energy_, mass_, status_, message_);
+    ar(needs_sort_);
+    instruments_.checkpoint(ar);
+    ar.expect("inflow", inflow_ ? 1 : 0);
+    if (inflow_) inflow_->checkpoint(ar);
+    ar.expect("debris", 0);
+    if (!ar.loading()) return;
+    n_ = x_[0].size();
+    const auto bad = [&](size_t size) { return size != n_; };
+    bool mismatch = bad(e_.size()) || bad(vol_.size()) || (!held_.empty() && bad(held_.size())) ||
+                    (!tag_.empty() && bad(tag_.size()));
+    for (int d = 0; d < D; ++d) mismatch = mismatch || bad(x_[d].size()) || bad(v_[d].size());
+    for (auto& c : C_) mismatch = mismatch || bad(c.size());
+    if (mismatch) ar.fail("particles", "particle arrays of different lengths");
+    if (status_ == RunStatus::kUnstable) ar.fail("status", "the checkpointed run had gone unstable");
+    status_ = time_ < scene_.solver.end_time - 1e-12 ? RunStatus::kRunning : RunStatus::kOk;
+    resize_work();
+    if (!needs_sort_) {
+      if (keys_.size() != n_) ar.fail("particles", "block keys for a different particle count");
+      build_blocks();
+    }
   }
 
   // --- read access for the instruments (host mirrors, refreshed lazily) ---
@@ -866,28 +752,11 @@ class MpmCuda final : public Simulation {
   }
 
   void setup_boundaries() {
-    std::vector<Wall<D, T>> walls;
-    for (const auto& b : scene_.boundaries) {
-      Wall<D, T> w;
-      w.box = b.shape.type == ShapeType::kBox;
-      for (int d = 0; d < D; ++d) {
-        w.a[d] = w.box ? b.shape.lo[d] : b.shape.point[d];
-        w.b[d] = w.box ? b.shape.hi[d] : b.shape.normal[d];
-        w.vb[d] = T(b.velocity[d]);
-      }
-      w.bc = static_cast<int>(b.condition);
-      w.mu = T(b.friction);
-      w.subcell_axes = b.subcell_axes;
-      walls.push_back(w);
-      if (b.condition == BoundaryCondition::kSymmetry) {
-        has_sym_ = 1;
-        sym_ = symmetry_plane<D>(b, grid_lo_, dx_);
-      }
-    }
+    const std::vector<Wall<D, T>> walls = mpm::scene_walls<D, T>(scene_);
+    has_sym_ = mpm::scene_symmetry_plane<D>(scene_, grid_lo_, dx_, sym_) ? 1 : 0;
     walls_.assign(walls.begin(), walls.end());
     n_walls_ = static_cast<int>(walls.size());
-    domain_bc_ = static_cast<int>(scene_.domain_walls);
-    domain_mu_ = T(scene_.domain_wall_friction);
+    container_ = mpm::scene_container<D, T>(scene_);
     load_impulse_.assign(walls.size() * D, 0.0);
     has_loads_ = !scene_.instruments.loads.empty() && !walls.empty();
     impulse_.assign(walls.size() * D, 0.0);
@@ -902,8 +771,6 @@ class MpmCuda final : public Simulation {
       s.grid_lo_d[d] = grid_lo_[d];
       s.gravity[d] = gravity_[d];
       s.strain_slope[d] = strain_slope_[d];
-      s.domain_lo[d] = scene_.domain_lo[d];
-      s.domain_hi[d] = scene_.domain_hi[d];
     }
     for (int k = 0; k < D * D; ++k) s.C[k] = raw(C_[k]);
     s.e = raw(e_);
@@ -938,16 +805,27 @@ class MpmCuda final : public Simulation {
     s.dx_d = dx_;
     s.walls = raw(walls_);
     s.n_walls = n_walls_;
-    s.domain_bc = domain_bc_;
-    s.domain_mu = domain_mu_;
+    s.container = container_;
     s.impulse = has_loads_ ? raw(impulse_) : nullptr;
     return s;
   }
 
+  mpm::G2pConstants<D, T> g2p_constants(const V& s, T dt) const {
+    mpm::G2pConstants<D, T> k;
+    k.dt = dt;
+    k.psi = psi_;
+    k.fill_rate = T(mpm::fill_rate(double(dt), c_, dx_));
+    k.fill_tol = s.fill_tol;
+    for (int d = 0; d < D; ++d) k.slope[d] = strain_slope_[d];
+    k.law_d = s.law_d;
+    k.has_sym = has_sym_ != 0;
+    k.sym = sym_;
+    return k;
+  }
+
   // Sorts particles by block and rebuilds the sparse block lists, all on the device.
   void sort_particles() {
-    thr::counting_iterator<size_t> first(0);
-    thr::for_each(thr::device, first, first + n_, SortKey<D, T>{view(), raw(keys_)});
+    mpm::parallel_for(n_, SortKey<D, T>{view(), raw(keys_)});
     thr::sequence(thr::device, order_.begin(), order_.end());
     thr::stable_sort_by_key(thr::device, keys_.begin(), keys_.end(), order_.begin());
     auto permute = [&](thr::device_vector<T>& a) {
@@ -963,6 +841,13 @@ class MpmCuda final : public Simulation {
     permute(vol_);
     host_vol_fresh_ = false;
     if (!held_.empty()) permute(held_);
+    if (!tag_.empty()) permute(tag_);
+    build_blocks();
+  }
+
+  // The particle blocks, each particle's block index, the grid blocks and the neighbour tables, from the particles'
+  // block keys (keys_, in particle order) as the last sort assigned them.
+  void build_blocks() {
     // Particle blocks, and each particle's block index.
     pkeys_.resize(n_);
     pkeys_.resize(thr::unique_copy(thr::device, keys_.begin(), keys_.end(), pkeys_.begin()) - pkeys_.begin());
@@ -970,7 +855,7 @@ class MpmCuda final : public Simulation {
     // Grid blocks: the 3^D neighbourhood of every particle block; each particle block's neighbour table.
     const size_t nn = pkeys_.size() * kNbr;
     nbr_keys_.resize(nn);
-    thr::for_each(thr::device, first, first + nn, NeighbourKey<D>{raw(pkeys_), raw(nbr_keys_)});
+    mpm::parallel_for(nn, NeighbourKey<D>{raw(pkeys_), raw(nbr_keys_)});
     gkeys_.resize(nn);
     thr::copy(thr::device, nbr_keys_.begin(), nbr_keys_.end(), gkeys_.begin());
     thr::sort(thr::device, gkeys_.begin(), gkeys_.end());
@@ -1009,37 +894,88 @@ class MpmCuda final : public Simulation {
     if (a.bad >= 0) {
       double xp[D];
       for (int d = 0; d < D; ++d) xp[d] = double(T(x_[d][a.bad]));
-      std::ostringstream s;
-      s << (a.bad_kind == 1 ? "non-finite value (NaN/Inf) or non-positive volume ratio J"
-                            : "a particle left the domain")
-        << " at t = " << t_new << " s (step " << steps_ + 1 << ", dt = " << double(dt) << " s), particle "
-        << a.bad << " at " << fmt_point(xp, D) << "; try a smaller solver.cfl or a finer solver.dx";
-      fail(s.str());
+      fail(mpm::bad_particle_message(a.bad_kind, t_new, steps_ + 1, double(dt), a.bad, xp, D));
       return;
     }
     const double e = a.ke + a.pe + a.el;
     if (e > energy0_ + energy_slack_) {
-      // Where: the fastest particle, found on the host (this runs once, when the run stops).
       sync_host();
-      size_t fastest = 0;
-      double best = -1;
-      for (size_t i = 0; i < n_; ++i) {
-        double v2 = 0;
-        for (int d = 0; d < D; ++d) v2 += double(hv_[d][i]) * hv_[d][i];
-        if (v2 > best) {
-          best = v2;
-          fastest = i;
-        }
-      }
-      double xf[D];
-      for (int d = 0; d < D; ++d) xf[d] = hx_[d][fastest];
-      std::ostringstream s;
-      s << "energy grew beyond what gravity and forcing supply at t = " << t_new << " s (step " << steps_ + 1
-        << "): total " << e << " J against " << energy0_ << " J initially (max speed " << max_speed_
-        << " m/s, particle " << fastest << " at " << fmt_point(xf, D) << "); try a smaller solver.cfl";
-      fail(s.str());
+      fail(mpm::energy_growth_message<D>(t_new, steps_ + 1, e, energy0_, max_speed_, hx_, hv_, n_));
     }
     last_energy_ = {a.ke, a.pe, a.el};
+  }
+
+  // Per-particle work arrays, after the particle count changed.
+  void resize_work() {
+    fill_work_.assign(n_, 0.0);
+    pblk_.resize(n_);
+    keys_.resize(n_);
+    order_.resize(n_);
+    tmp_.resize(n_);
+    host_fresh_ = host_vol_fresh_ = false;
+  }
+
+  // The inflow works on host arrays (solver/inflow.h): the particles go to the host and back around it each step,
+  // O(n) copies that a device-side buffer would save.
+  ParticleArrays<D, T> host_arrays() {
+    ParticleArrays<D, T> a;
+    for (int d = 0; d < D; ++d) {
+      a.x[d] = &h_.x[d];
+      a.v[d] = &h_.v[d];
+    }
+    for (int k = 0; k < D * D; ++k) a.C[k] = &h_.C[k];
+    a.e = &h_.e;
+    a.vol = &h_.vol;
+    a.held = &h_.held;
+    a.tag = &h_.tag;
+    return a;
+  }
+  static void download(const thr::device_vector<T>& a, std::vector<T>& h) {
+    h.resize(a.size());
+    thr::copy(a.begin(), a.end(), h.begin());
+  }
+  void to_host() {
+    for (int d = 0; d < D; ++d) {
+      download(x_[d], h_.x[d]);
+      download(v_[d], h_.v[d]);
+    }
+    for (int k = 0; k < D * D; ++k) download(C_[k], h_.C[k]);
+    download(e_, h_.e);
+    download(vol_, h_.vol);
+    download(held_, h_.held);
+    download(tag_, h_.tag);
+  }
+  void to_device() {
+    for (int d = 0; d < D; ++d) {
+      x_[d].assign(h_.x[d].begin(), h_.x[d].end());
+      v_[d].assign(h_.v[d].begin(), h_.v[d].end());
+    }
+    for (int k = 0; k < D * D; ++k) C_[k].assign(h_.C[k].begin(), h_.C[k].end());
+    e_.assign(h_.e.begin(), h_.e.end());
+    vol_.assign(h_.vol.begin(), h_.vol.end());
+    held_.assign(h_.held.begin(), h_.held.end());
+    tag_.assign(h_.tag.begin(), h_.tag.end());
+    n_ = h_.x[0].size();
+    resize_work();
+  }
+  // As MpmSolver::apply_inflow: the inflow moves, adds and removes particles after the step; the energy audit is
+  // told what it did.
+  void apply_inflow(double t0, double t1) {
+    to_host();
+    const auto change = inflow_->apply(t0, t1);
+    energy0_ += change.energy;
+    to_device();
+    if (change.structural) mass_ = water_mass(h_.vol, rho_);
+    needs_sort_ = needs_sort_ || change.structural;
+  }
+
+  // A device array written to or read from the archive through a host copy.
+  template <typename U>
+  static void archive(StateArchive& ar, thr::device_vector<U>& a) {
+    std::vector<U> h(ar.loading() ? 0 : a.size());
+    if (!ar.loading()) thr::copy(a.begin(), a.end(), h.begin());
+    ar(h);
+    if (ar.loading()) a.assign(h.begin(), h.end());
   }
 
   void fail(const std::string& what) {
@@ -1075,7 +1011,7 @@ class MpmCuda final : public Simulation {
   double spacing_ = 0, rho_ = 0, mass_ = 0;  // mass_: rho times the particles' volumes summed in double
   size_t n_ = 0;
   // device: particles (e: volumetric strain J - 1), sort scratch, blocks, grid, walls
-  thr::device_vector<T> x_[D], v_[D], C_[D * D], e_, vol_, held_, tmp_;
+  thr::device_vector<T> x_[D], v_[D], C_[D * D], e_, vol_, held_, tag_, tmp_;  // tag_: solver/inflow.h
   thr::device_vector<int32_t> pblk_, p_nbr_;
   thr::device_vector<uint32_t> order_;
   thr::device_vector<uint64_t> keys_, pkeys_, gkeys_, nbr_keys_;
@@ -1090,10 +1026,13 @@ class MpmCuda final : public Simulation {
   int n_walls_ = 0;
   int has_sym_ = 0;  // a symmetry plane (mpm::SymmetryPlane)
   mpm::SymmetryPlane sym_;
-  int domain_bc_ = 2;
-  T domain_mu_ = 0;
+  mpm::Container<D, T> container_;  // the domain box
   bool has_loads_ = false;
   // host
+  std::unique_ptr<InflowBoundary<D, T>> inflow_;
+  struct {
+    std::vector<T> x[D], v[D], C[D * D], e, vol, held, tag;
+  } h_;  // the particles on the host, for the inflow
   mutable std::vector<T> hx_[D], hv_[D], hvol_;
   mutable bool host_fresh_ = false, host_vol_fresh_ = false;
   std::vector<double> load_impulse_;
@@ -1117,14 +1056,15 @@ std::unique_ptr<Simulation> make(const Scene& scene, const SimulationOptions& op
 }
 
 }  // namespace
+}  // namespace mpm
 
 #ifdef FLUME_CUDA_EMULATION
 std::unique_ptr<Simulation> make_cuda_host_emulation(const Scene& scene, const SimulationOptions& options) {
-  return make(scene, options);
+  return mpm::make(scene, options);
 }
 #else
 std::unique_ptr<Simulation> make_cuda_simulation(const Scene& scene, const SimulationOptions& options) {
-  return make(scene, options);
+  return mpm::make(scene, options);
 }
 
 bool cuda_device_present() {

@@ -12,11 +12,13 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <string>
 
 #include "common/errors.h"
 #include "solver/checkpoint.h"
+#include "solver/cuda/mpm_cuda.h"
 #include "solver/debris_coupling.h"
 #include "solver/run.h"
 #include "solver/scene.h"
@@ -89,19 +91,22 @@ size_t samples(const Record& r) {
   return n;
 }
 
+using Factory = std::function<std::unique_ptr<Simulation>(const Scene&)>;
+std::unique_ptr<Simulation> cpu(const Scene& s) { return make_simulation(s, {}); }
+
 // Runs `scene` to its end straight, and again stopped at t_stop, checkpointed, rebuilt from the scene, loaded
 // and run on: both must agree to the bit.
-void expect_exact_resume(const Scene& scene, double t_stop) {
-  auto straight = make_simulation(scene, {});
+void expect_exact_resume(const Scene& scene, double t_stop, const Factory& make = cpu) {
+  auto straight = make(scene);
   ASSERT_EQ(test::run_until(*straight, scene.solver.end_time), RunStatus::kOk) << straight->message();
 
-  auto first = make_simulation(scene, {});
+  auto first = make(scene);
   ASSERT_EQ(test::run_until(*first, t_stop), RunStatus::kRunning);
   StateArchive out;
   first->checkpoint(out);
   const long steps_at_stop = first->steps();
 
-  auto resumed = make_simulation(scene, {});
+  auto resumed = make(scene);
   StateArchive in(out.bytes(), "memory");
   resumed->checkpoint(in);
   in.finish();
@@ -142,6 +147,16 @@ TEST(Checkpoint, ResumedBasinRepeatsTheUninterruptedRun) {
   expect_exact_resume(scene, 0.55);
 }
 
+#ifdef FLUME_CUDA_EMULATION_AVAILABLE
+// The CUDA backend's source on the host (solver/cuda/mpm_cuda.h): the same basin, stopped mid-release. Its sums
+// run in a fixed order (sequential), so its diagnostics repeat to the bit as well.
+TEST(Checkpoint, CudaEmulationResumedBasinRepeatsTheUninterruptedRun) {
+  const Scene scene =
+      load_scene(waseda("waseda_2d.json"), {parse_override("solver.dx=0.04"), parse_override("solver.end_time=1.2")});
+  expect_exact_resume(scene, 0.55, [](const Scene& s) { return make_cuda_host_emulation(s, {}); });
+}
+#endif
+
 // The apron fed through the inflow boundary by a section record: the lattice lines' advance and their error
 // carries are part of the state.
 TEST(Checkpoint, ResumedInflowRepeatsTheUninterruptedRun) {
@@ -153,6 +168,12 @@ TEST(Checkpoint, ResumedInflowRepeatsTheUninterruptedRun) {
                                  {parse_override("solver.dx=0.04"), parse_override("solver.end_time=3.5"),
                                   parse_override("inflow.record=" + (dir / "feed" / "result.h5").string())});
   expect_exact_resume(apron, 2.9);  // the bore crosses the inflow plane from about 2.3 s
+#ifdef FLUME_CUDA_EMULATION_AVAILABLE
+  {
+    SCOPED_TRACE("the CUDA backend's source on the host");
+    expect_exact_resume(apron, 2.9, [](const Scene& s) { return make_cuda_host_emulation(s, {}); });
+  }
+#endif
   fs::remove_all(dir);
 }
 
@@ -253,10 +274,13 @@ TEST(Checkpoint, RefusesWhatDoesNotFit) {
   EXPECT_EQ(error_field([&] { run_scene(scene("reservoir.gate_height_m=0.12"), {}, out, false, resume); },
                         "another scene"),
             "scene");
-  // The CUDA backend, before anything runs.
-  SimulationOptions cuda;
-  cuda.backend = Backend::kCuda;
-  EXPECT_EQ(error_field([&] { run_scene(scene(""), cuda, out, false, every); }, "does not checkpoint"), "cuda");
+  // The CUDA backend checkpoints as well (Checkpoint.CudaEmulation*); on a machine without a device it is refused
+  // before anything runs.
+  if (!cuda_available()) {
+    SimulationOptions cuda;
+    cuda.backend = Backend::kCuda;
+    EXPECT_EQ(error_field([&] { run_scene(scene(""), cuda, out, false, every); }, "CUDA"), "cuda");
+  }
   // A flipped byte, then a truncated file.
   const fs::path ck = dir / "run" / "checkpoint.bin";
   std::string bytes = test::read_text(ck.string());

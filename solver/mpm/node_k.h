@@ -1,0 +1,127 @@
+// One grid node's update against the boundaries, written once for both backends (MpmSolver::update_node on the
+// CPU, GridUpdate in cuda/mpm_cuda.cu): the scene's walls in scene order (paper eq. 2, their faces, the sub-cell
+// cover of a face between grid lines), the ghost search of free-slip walls and the domain box as a container.
+// The backends differ only in where the node's mass and momentum come from and where the results are stored.
+#pragma once
+#include <cstdint>
+
+#include "solver/mpm_kernels.h"
+
+namespace flume::mpm {
+
+// Adds v to *a: plain on the host (the CPU's buffers are per thread; the CUDA source's host emulation is
+// sequential), an atomic on a device, where many threads add into one wall's load or one node (double atomics
+// need sm_60+).
+template <typename T>
+FLUME_HD void accumulate(T* a, T v) {
+#if defined(__CUDA_ARCH__)
+  atomicAdd(a, v);
+#else
+  *a += v;
+#endif
+}
+
+// One scene boundary, as the node update reads it. Which nodes lie on a wall is decided in double (mpm::wall_faces).
+template <int D, typename T>
+struct Wall {
+  int box = 1;
+  double a[D] = {}, b[D] = {};  // box: lo, hi; half-space: point, normal
+  T vb[D] = {};
+  Bc bc = Bc::kSeparate;
+  T mu = 0;
+  unsigned subcell_axes = 0;  // mpm::subcell_cover
+};
+
+// The domain box: a container whose faces hold the nodes on or beyond them.
+template <int D, typename T>
+struct Container {
+  double lo[D] = {}, hi[D] = {};
+  Bc bc = Bc::kSeparate;
+  T mu = 0;
+};
+
+// What the ghost search found for a node (mpm::ghost_half_space): the reflection's offset in nodes, its normal
+// axes, whether it is undefined, and the scene wall whose load takes the image's push (-1: the domain box).
+template <int D>
+struct GhostSearch {
+  int offset[D] = {};
+  unsigned axes = 0;
+  bool ambiguous = false;
+  int wall = -1;
+  FLUME_HD bool found() const { return axes && !ambiguous; }
+};
+
+// The boundaries acting on the node at xn (double, m) with mass m and velocity v (after gravity): each scene wall
+// in `ids[0..count)` (null ids: walls 0..count-1) projects v through its faces or, where the node lies partly under
+// a face between grid lines, drags it (mpm::subcell_drag); each adds m (v_before - v) times `load_weight` (1/2 on
+// a symmetry plane) to its load in impulse[wall * D + d] (null: no load cell reads them). Then the ghost search
+// of the free-slip walls and the domain box, and the domain box as a container. Returns whether a wall set v.
+template <int D, typename T>
+FLUME_HD bool apply_boundaries(const double* xn, T m, T* v, T dt, double load_weight, double dx, double subcell_rate0,
+                               const Wall<D, T>* walls, const int32_t* ids, int count,
+                               const Container<D, T>& container, double* impulse, GhostSearch<D>& ghost) {
+  bool on_wall = false;
+  for (int q = 0; q < count; ++q) {
+    const int k = ids ? ids[q] : q;
+    const Wall<D, T>& w = walls[k];
+    if (w.bc == Bc::kSymmetry) continue;  // not a wall: the grid is folded across it (mpm::SymmetryPlane)
+    double n[2 * D][D];
+    const int faces = wall_faces<D>(xn, w.box != 0, w.a, w.b, dx, n);
+    if (!faces) {
+      if (w.subcell_axes) {  // a node partly covered by a face between grid lines
+        double nearest[D];
+        const double cover = subcell_cover<D>(xn, w.a, w.b, dx, w.subcell_axes, nearest);
+        if (cover > 0) {
+          T before[D], held[D];
+          for (int d = 0; d < D; ++d) before[d] = held[d] = v[d];
+          const int nf = wall_faces<D>(nearest, w.box != 0, w.a, w.b, dx, n);
+          apply_wall<D>(held, n, nf, w.vb, w.bc, w.mu);
+          subcell_drag<D>(v, held, cover, subcell_rate0, dt);
+          if (impulse)
+            for (int d = 0; d < D; ++d) accumulate(&impulse[k * D + d], load_weight * double(m) * (before[d] - v[d]));
+        }
+      }
+      continue;
+    }
+    on_wall = true;
+    T before[D];
+    for (int d = 0; d < D; ++d) before[d] = v[d];
+    apply_wall<D>(v, n, faces, w.vb, w.bc, w.mu);
+    if (impulse)
+      for (int d = 0; d < D; ++d) accumulate(&impulse[k * D + d], load_weight * double(m) * (before[d] - v[d]));
+    if (w.bc == Bc::kSticky) {
+      ghost.ambiguous = true;
+    } else {
+      const unsigned axes_before = ghost.axes;
+      if (w.box)
+        ghost_box<D>(xn, w.a, w.b, dx, ghost.offset, ghost.axes, ghost.ambiguous);
+      else
+        ghost_half_space<D>(xn, w.a, w.b, dx, ghost.offset, ghost.axes, ghost.ambiguous);
+      if (ghost.axes != axes_before) ghost.wall = k;
+    }
+  }
+  if (container.bc == Bc::kSticky) {
+    for (int d = 0; d < D; ++d)
+      ghost.ambiguous = ghost.ambiguous || xn[d] < container.lo[d] - kGhostDepth * dx ||
+                        xn[d] > container.hi[d] + kGhostDepth * dx;
+  } else {
+    ghost_domain<D>(xn, container.lo, container.hi, dx, ghost.offset, ghost.axes, ghost.ambiguous);
+  }
+  // The domain box is a container: nodes on or beyond its faces are walls.
+  for (int d = 0; d < D; ++d) {
+    T n[D] = {};
+    if (xn[d] <= container.lo[d] + 1e-6 * dx) {
+      n[d] = T(1);
+    } else if (xn[d] >= container.hi[d] - 1e-6 * dx) {
+      n[d] = T(-1);
+    } else {
+      continue;
+    }
+    const T zero[D] = {};
+    project_velocity<D>(v, n, zero, container.bc, container.mu);
+    on_wall = true;
+  }
+  return on_wall;
+}
+
+}  // namespace flume::mpm

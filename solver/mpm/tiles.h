@@ -1,0 +1,80 @@
+// The CPU backend's race-free scatter: each particle block scatters (P2G) into its own tile of kTile^D nodes, a
+// private buffer no other thread touches; each grid block then gathers the overlapping parts of the tiles of its
+// 3^D neighbouring particle blocks in a fixed order. No atomics, and the result does not depend on the number of
+// threads. Here: where a tile node lies in the grid, and which part of a tile a block's particles reach.
+#pragma once
+#include <algorithm>
+#include <cstdint>
+#include <vector>
+
+#include "solver/mpm_kernels.h"
+
+namespace flume::mpm {
+
+// For each node of a particle block's tile: which of the 3^D neighbouring grid blocks holds it, and where.
+struct TileNode {
+  int block, local;
+};
+
+// A particle block's tile box: the tile nodes its particles' stencils reach, [lo, hi) per axis (tile_box).
+template <int D>
+struct TileBox {
+  int lo[D], hi[D];
+};
+
+template <int D>
+std::vector<TileNode> make_tile_map() {
+  constexpr int kTileNodes = Pow<D>::of(kTile);
+  std::vector<TileNode> map(kTileNodes);
+  for (int a = 0; a < kTileNodes; ++a) {
+    int o = 0, local = 0;
+    for (int d = D - 1, r = a, stride = 1, lstride = 1; d >= 0; --d, r /= kTile) {
+      const int ad = r % kTile;
+      const int bo = ad == 0 ? -1 : (ad <= kBlock ? 0 : 1);  // tile index 0 lies in the block below
+      o += (bo + 1) * stride;
+      local += (ad - 1 - kBlock * bo) * lstride;
+      stride *= 3;
+      lstride *= kBlock;
+    }
+    map[a] = {o, local};
+  }
+  return map;
+}
+
+// The tile nodes that the particles [begin, end) of block `blk` reach: the union of their 3^D stencils, [lo, hi)
+// per axis in tile coordinates. P2G zeroes and fills only these, the grid gather adds only these (the rest of the
+// tile would add exact zeros) and G2P fetches only these from the grid: a block of a thin sheet (a flow one or two
+// cells deep) reaches a third of its tile, a full block two thirds of it (a particle sits up to a cell outside its
+// block, so the tile is kBlock + 4 wide). x: D arrays of positions.
+template <int D, typename T>
+TileBox<D> tile_box(const int* blk, const T* const* x, uint32_t begin, uint32_t end, const T* lo_grid, T inv_dx) {
+  TileBox<D> box;
+  for (int d = 0; d < D; ++d) {
+    const int origin = blk[d] * kBlock - 1;
+    int lo = kTile, hi = 0;
+    const T* xd = x[d];
+    for (uint32_t i = begin; i < end; ++i) {
+      T f;
+      const int rel = stencil_base((xd[i] - lo_grid[d]) * inv_dx, f) - origin;
+      lo = std::min(lo, rel);
+      hi = std::max(hi, rel + 3);
+    }
+    box.lo[d] = std::max(0, lo);
+    box.hi[d] = std::min(kTile, std::max(hi, box.lo[d]));
+  }
+  return box;
+}
+
+// Calls row(a, len) for each row of the box along the last axis: its first tile node and its length.
+template <int D, typename Row>
+void for_each_box_row(const TileBox<D>& box, Row&& row) {
+  const int len = box.hi[D - 1] - box.lo[D - 1];
+  if constexpr (D == 2) {
+    for (int a0 = box.lo[0]; a0 < box.hi[0]; ++a0) row(a0 * kTile + box.lo[1], len);
+  } else {
+    for (int a0 = box.lo[0]; a0 < box.hi[0]; ++a0)
+      for (int a1 = box.lo[1]; a1 < box.hi[1]; ++a1) row((a0 * kTile + a1) * kTile + box.lo[2], len);
+  }
+}
+
+}  // namespace flume::mpm
