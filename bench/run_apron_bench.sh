@@ -25,6 +25,7 @@ for flume in "$@"; do
   k=$((k + 1))
   dir=$out/run$k
   mkdir -p "$dir"
+  echo "# $flume: $("$flume" --version) (the default build is portable; -DFLUME_NATIVE=ON for native)"
   cp "$ckpt" "$dir/checkpoint.bin"
   start=$(date +%s.%N)
   "$flume" run "$root/scenes/waseda/waseda_apron.json" --out "$dir" --set solver.dx=0.02 --set solver.end_time="$end" \

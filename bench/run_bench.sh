@@ -3,18 +3,29 @@
 # check (the same water in a domain of 20 times the volume). Prints one JSON object per run (flume bench's
 # output plus the load average before it) and a Markdown table for docs/benchmarks.md.
 #
-#   bench/run_bench.sh [FLUME] [STEPS]      defaults: build/bin/flume, 40 measured steps
+#   bench/run_bench.sh [FLUME] [STEPS]      defaults: a native build, 40 measured steps
+#
+# Without FLUME it builds flume native (-DFLUME_NATIVE=ON: -march=native) in build-native/ and says so; the
+# default build is portable (docs/benchmarks.md compares the two).
 #
 # Other work on the machine skews the figures: the script records `uptime`'s 1-minute load before each run;
 # measure when it is below about 0.5.
 set -euo pipefail
 echo "# load before: $(cat /proc/loadavg)"
 root=$(cd "$(dirname "$0")/.." && pwd)
-flume=${1:-$root/build/bin/flume}
+flume=${1:-}
+if [[ -z $flume ]]; then
+  echo "# building flume with -DFLUME_NATIVE=ON (-march=native) in $root/build-native"
+  cmake -S "$root" -B "$root/build-native" -DCMAKE_BUILD_TYPE=Release -DFLUME_NATIVE=ON -DFLUME_TESTS=OFF >/dev/null
+  cmake --build "$root/build-native" -j2 --target flume >/dev/null
+  flume=$root/build-native/bin/flume
+fi
 steps=${2:-40}
 scene=$root/bench/scenes/dam_break_3d_1m.json
 out=${BENCH_OUT:-$(mktemp -d)}
 [[ -x $flume ]] || { echo "run_bench.sh: no flume executable at $flume (build first)" >&2; exit 2; }
+# Which build this is: the figures of docs/benchmarks.md are native unless they say otherwise.
+echo "# $("$flume" --version)"
 
 echo "# $(date -u +%Y-%m-%dT%H:%MZ), $(lscpu | sed -n 's/^Model name: *//p'), $(nproc) cores, $(git -C "$root" describe --always --dirty)"
 run() {  # run NAME THREADS PRECISION [--set ...]

@@ -137,10 +137,11 @@ class Driver {
   // lines of parallel starts don't interleave).
   void report_progress(const store::Evaluation& e, const Point& pt) const {
     std::string params;
-    for (const auto& [path, v] : json::parse(e.params_json).items()) {
-      char buf[64];
-      std::snprintf(buf, sizeof buf, "%s%s = %.6g", params.empty() ? "" : ", ", path.c_str(), v.get<double>());
-      params += buf;
+    const json values = json::parse(e.params_json);  // kept alive through the loop (items() is a view)
+    for (const auto& [path, v] : values.items()) {
+      char buf[32] = "";
+      if (v.is_number()) std::snprintf(buf, sizeof buf, "%.6g", v.get<double>());
+      params += (params.empty() ? "" : ", ") + path + " = " + (v.is_number() ? std::string(buf) : v.dump());
     }
     const double wall = std::chrono::duration<double>(Clock::now() - start_time_).count();
     std::fprintf(stderr, "flume calibrate: %s start %d #%d: objective %.6g (%s), run %lld %s, wall %s\n",

@@ -95,7 +95,8 @@ int run(int argc, char** argv) {
       return usage_error(path, extras.front() + ": unknown command (one of: " + names_of_subcommands(*at) + ")");
     return usage_error(path, "needs a command: one of " + names_of_subcommands(*at));
   }
-  for (const CLI::App* a = at; a; a = a->get_parent()) {
+  // A command that parses its own arguments gets them all (add_passthrough); the others may have no extras.
+  for (const CLI::App* a = at->get_prefix_command() ? nullptr : at; a; a = a->get_parent()) {
     const std::vector<std::string> extras = a->remaining();
     if (extras.empty()) continue;
     const std::string& x = extras.front();
