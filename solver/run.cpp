@@ -117,6 +117,9 @@ RunOutcome run_scene(const Scene& scene, const SimulationOptions& options, const
   if (checkpointing && options.backend == Backend::kCuda)
     throw InputError("--backend", "cuda", "the CUDA backend does not checkpoint yet: run with --backend cpu, or "
                                           "without --checkpoint-every/--resume");
+  if (checkpointing && scene.solver.method == SolverMethod::kSph)
+    throw InputError(scene.file, "solver.method", "SPH does not checkpoint yet: run without --checkpoint-every/--resume, "
+                                                  "or with solver.method mpm");
   std::error_code ec;
   fs::create_directories(out_dir, ec);
   if (ec) throw InputError(out_dir, "--out", "cannot create the output directory: " + ec.message());

@@ -14,6 +14,7 @@
 #include <sstream>
 
 #include "common/errors.h"
+#include "solver/checkpoint.h"
 #include "solver/instruments.h"
 #include "solver/seeding.h"
 #include "solver/simulation.h"
@@ -182,6 +183,11 @@ class SphSolver final : public Simulation {
     const Energy e = energy();
     energy0_ = e.total();
     energy_slack_ = std::max(energy_slack_, 0.01 * e.kinetic);
+  }
+
+  void checkpoint(StateArchive& ar) override {
+    throw InputError(ar.file().empty() ? std::string("--checkpoint-every") : ar.file(), "solver.method",
+                     "SPH does not checkpoint yet: run without --checkpoint-every/--resume, or with solver.method mpm");
   }
 
   // --- read access for the instruments ---
@@ -427,35 +433,14 @@ class SphSolver final : public Simulation {
       T tau_a[kS];
       for (int k = 0; k < kS; ++k) tau_a[k] = tau_[k][a];
       Accum<D, T> A;
-      sph::for_each_neighbour_range<D>(grid_, fluid_list_, xa, search_, [&](uint32_t b0, uint32_t b1) {
-        for (uint32_t b = b0; b < b1; ++b) {
-          T rab[D], r2 = 0;
-          for (int d = 0; d < D; ++d) {
-            rab[d] = xa[d] - X[d][b];
-            r2 += rab[d] * rab[d];
-          }
-          if (r2 >= P.support2 || b == a) continue;
-          T vab[D], tau_b[kS];
-          for (int d = 0; d < D; ++d) vab[d] = va[d] - V[d][b];
-          const T F = sph::wendland_gradient_factor(r2, P);
-          sph::pair_common<D, T>(P, rab, r2, F, vab, rho_a, p_a, R[b], pf_[b], mass_[b], A);
-          for (int k = 0; k < kS; ++k) tau_b[k] = tau_[k][b];
-          sph::pair_fluid_extras<D, T>(P, rab, r2, F, vab, rho_a, k_a, R[b], mass_[b], tau_a, tau_b, A);
-        }
+      for_pairs(fluid_list_, X, V, xa, va, [&](uint32_t b, const T* rab, T r2, const T* vab, T F) {
+        sph::pair_common<D, T>(P, rab, r2, F, vab, rho_a, p_a, R[b], pf_[b], mass_[b], A);
+        T tau_b[kS];
+        for (int k = 0; k < kS; ++k) tau_b[k] = tau_[k][b];
+        sph::pair_fluid_extras<D, T>(P, rab, r2, F, vab, rho_a, k_a, R[b], mass_[b], tau_a, tau_b, A);
       });
-      sph::for_each_neighbour_range<D>(grid_, wall_list_, xa, search_, [&](uint32_t b0, uint32_t b1) {
-        for (uint32_t b = b0; b < b1; ++b) {
-          T rab[D], r2 = 0;
-          for (int d = 0; d < D; ++d) {
-            rab[d] = xa[d] - xw_[d][b];
-            r2 += rab[d] * rab[d];
-          }
-          if (r2 >= P.support2) continue;
-          T vab[D];
-          for (int d = 0; d < D; ++d) vab[d] = va[d] - vw_[d][b];
-          const T F = sph::wendland_gradient_factor(r2, P);
-          sph::pair_common<D, T>(P, rab, r2, F, vab, rho_a, p_a, RW[b], pw_[b], mw_, A);
-        }
+      for_pairs(wall_list_, xw_, vw_, xa, va, [&](uint32_t b, const T* rab, T r2, const T* vab, T F) {
+        sph::pair_common<D, T>(P, rab, r2, F, vab, rho_a, p_a, RW[b], pw_[b], mw_, A);
       });
       for (int d = 0; d < D; ++d) a_[d][a] = A.acc[d] + P.g[d];
       if (!held_.empty()) a_[D - 1][a] += held_[a] * lift;  // the vacuum's hold: f(t) m |g| upward
@@ -480,19 +465,8 @@ class SphSolver final : public Simulation {
       }
       const T rho_k = RW[k], p_k = pw_[k];
       Accum<D, T> A;
-      sph::for_each_neighbour_range<D>(grid_, fluid_list_, xk, search_, [&](uint32_t b0, uint32_t b1) {
-        for (uint32_t b = b0; b < b1; ++b) {
-          T rab[D], r2 = 0;
-          for (int d = 0; d < D; ++d) {
-            rab[d] = xk[d] - X[d][b];
-            r2 += rab[d] * rab[d];
-          }
-          if (r2 >= P.support2) continue;
-          T vab[D];
-          for (int d = 0; d < D; ++d) vab[d] = vk[d] - V[d][b];
-          const T F = sph::wendland_gradient_factor(r2, P);
-          sph::pair_common<D, T>(P, rab, r2, F, vab, rho_k, p_k, R[b], pf_[b], mass_[b], A);
-        }
+      for_pairs(fluid_list_, X, V, xk, vk, [&](uint32_t b, const T* rab, T r2, const T* vab, T F) {
+        sph::pair_common<D, T>(P, rab, r2, F, vab, rho_k, p_k, R[b], pf_[b], mass_[b], A);
       });
       drhow_[k] = A.drho;
       for (int d = 0; d < D; ++d) fw_[d][k] = mw_ * A.acc[d];
@@ -501,6 +475,27 @@ class SphSolver final : public Simulation {
 #pragma omp parallel for reduction(+ : pairs) schedule(static)
     for (long i = 0; i < long(n_); ++i) pairs += pairs_[i];
     interactions_ += pairs;
+  }
+
+  // Calls body(b, r_ab, r^2, v_ab, F) for every particle b of `list` (positions X, velocities V) within the kernel's
+  // support of the point xa moving at va, F the kernel gradient's factor. A particle at xa itself (the particle
+  // whose neighbours these are) is left out: its terms are all zero.
+  template <class Body>
+  void for_pairs(const sph::CellList& list, const std::vector<T>* X, const std::vector<T>* V, const T* xa, const T* va,
+                 const Body& body) const {
+    sph::for_each_neighbour_range<D>(grid_, list, xa, search_, [&](uint32_t b0, uint32_t b1) {
+      for (uint32_t b = b0; b < b1; ++b) {
+        T rab[D], r2 = 0;
+        for (int d = 0; d < D; ++d) {
+          rab[d] = xa[d] - X[d][b];
+          r2 += rab[d] * rab[d];
+        }
+        if (r2 >= P_.support2 || r2 == T(0)) continue;
+        T vab[D];
+        for (int d = 0; d < D; ++d) vab[d] = va[d] - V[d][b];
+        body(b, rab, r2, vab, sph::wendland_gradient_factor(r2, P_));
+      }
+    });
   }
 
   // DualSPHysics' step condition from the rates just evaluated, bounded by the scene's max_dt and by the
