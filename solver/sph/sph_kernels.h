@@ -22,7 +22,8 @@ struct Sym {
   }
 };
 
-// Everything a pair interaction reads, in the solver's precision.
+// Everything a pair interaction reads, in the solver's precision. The pair functions take each particle's 1/rho
+// as well as rho (computed once per particle and evaluation: a division per pair less).
 template <typename T>
 struct Params {
   T h = 0, inv_h = 0;
@@ -84,23 +85,24 @@ struct Accum {
 // 2002, eq. 9's second term) or Monaghan's artificial viscosity when alpha > 0. v_ab uses a wall particle's
 // prescribed velocity.
 template <int D, typename T>
-FLUME_HD void pair_common(const Params<T>& P, const T* rab, T r2, T F, const T* vab, T rho_a, T p_a, T rho_b, T p_b,
-                          T m_b, Accum<D, T>& A) {
+FLUME_HD void pair_common(const Params<T>& P, const T* rab, T r2, T F, const T* vab, T rho_a, T inv_rho_a, T p_a,
+                          T rho_b, T inv_rho_b, T p_b, T m_b, Accum<D, T>& A) {
   T dot = 0;
   for (int d = 0; d < D; ++d) dot += vab[d] * rab[d];
-  A.drho += m_b * F * dot * (rho_a / rho_b);
+  const T mF = m_b * F;
+  A.drho += mF * dot * (rho_a * inv_rho_b);
   const T inv_r2 = T(1) / (r2 + P.eta2);
   const T vdt = std::fabs(dot) * inv_r2;
   A.visc_dt = vdt > A.visc_dt ? vdt : A.visc_dt;
-  T press = -m_b * (p_a + p_b) / (rho_a * rho_b) * F;
+  T press = -mF * (p_a + p_b) * (inv_rho_a * inv_rho_b);
   if (P.alpha > T(0)) {
     if (dot < T(0)) {  // approaching pairs only (Monaghan 1992): Pi_ab = -alpha c0 mu / rho_mean
       const T mu = P.h * dot * inv_r2;
-      press -= m_b * (-P.alpha * P.c0 * mu / (T(0.5) * (rho_a + rho_b))) * F;
+      press += mF * P.alpha * P.c0 * mu / (T(0.5) * (rho_a + rho_b));
     }
     for (int d = 0; d < D; ++d) A.acc[d] += press * rab[d];
   } else {
-    const T lam = m_b * T(4) * P.nu * F * r2 * inv_r2 / (rho_a + rho_b);
+    const T lam = mF * T(4) * P.nu * r2 * inv_r2 / (rho_a + rho_b);
     for (int d = 0; d < D; ++d) A.acc[d] += press * rab[d] + lam * vab[d];
   }
   ++A.pairs;
@@ -121,11 +123,11 @@ FLUME_HD T hydrostatic_density_slope(T rho, T p, const Params<T>& P) {
 // velocity gradient it is computed from next.
 template <int D, typename T>
 FLUME_HD void pair_fluid_extras(const Params<T>& P, const T* rab, T r2, T F, const T* vab, T rho_a, T k_a, T rho_b,
-                                T m_b, const T* tau_a, const T* tau_b, Accum<D, T>& A) {
+                                T inv_rho_b, T m_b, const T* tau_a, const T* tau_b, Accum<D, T>& A) {
   T g_dot_r = 0;
   for (int d = 0; d < D; ++d) g_dot_r += P.g[d] * rab[d];
   const T drho_dyn = (rho_a - rho_b) - k_a * g_dot_r;
-  const T V_b = m_b / rho_b;
+  const T V_b = m_b * inv_rho_b;
   A.drho += P.ddt * T(2) * drho_dyn * F * r2 / (r2 + P.eta2) * V_b;
   if (P.alpha > T(0)) return;
   for (int i = 0; i < D; ++i) {

@@ -303,6 +303,7 @@ class SphSolver final : public Simulation {
     rhoh_.resize(n_);
     drho_.resize(n_);
     pf_.resize(n_);
+    irf_.resize(n_);
     visc_dt_.resize(n_);
     pairs_.resize(n_);
     for (int k = 0; k < kS; ++k) {
@@ -352,6 +353,7 @@ class SphSolver final : public Simulation {
     rhowh_.assign(nw_, T(scene_.fluid.density));
     drhow_.assign(nw_, T(0));
     pw_.assign(nw_, T(0));
+    irw_.assign(nw_, T(1) / T(scene_.fluid.density));
     mw_ = T(scene_.fluid.density * std::pow(spacing_, D));
     for (int d = 0; d < D; ++d) fw_[d].assign(nw_, T(0));
     load_impulse_.assign(scene_.boundaries.size() * D, 0.0);
@@ -419,8 +421,14 @@ class SphSolver final : public Simulation {
   void evaluate(const std::vector<T>* X, const std::vector<T>* V, const std::vector<T>& R, const std::vector<T>& RW,
                 double t) {
     const sph::Params<T> P = P_;
-    sph::parallel_for(n_, [&](size_t i) { pf_[i] = sph::tait_pressure(R[i], P); });
-    sph::parallel_for(nw_, [&](size_t k) { pw_[k] = sph::tait_pressure(RW[k], P); });
+    sph::parallel_for(n_, [&](size_t i) {
+      pf_[i] = sph::tait_pressure(R[i], P);
+      irf_[i] = T(1) / R[i];
+    });
+    sph::parallel_for(nw_, [&](size_t k) {
+      pw_[k] = sph::tait_pressure(RW[k], P);
+      irw_[k] = T(1) / RW[k];
+    });
     const T lift = T(hold_lift(t));
     const bool sps = !artificial_;
     sph::parallel_for(n_, [&](size_t a) {
@@ -429,18 +437,18 @@ class SphSolver final : public Simulation {
         xa[d] = X[d][a];
         va[d] = V[d][a];
       }
-      const T rho_a = R[a], p_a = pf_[a], k_a = sph::hydrostatic_density_slope(rho_a, p_a, P);
+      const T rho_a = R[a], ira = irf_[a], p_a = pf_[a], k_a = sph::hydrostatic_density_slope(rho_a, p_a, P);
       T tau_a[kS];
       for (int k = 0; k < kS; ++k) tau_a[k] = tau_[k][a];
       Accum<D, T> A;
       for_pairs(fluid_list_, X, V, xa, va, [&](uint32_t b, const T* rab, T r2, const T* vab, T F) {
-        sph::pair_common<D, T>(P, rab, r2, F, vab, rho_a, p_a, R[b], pf_[b], mass_[b], A);
+        sph::pair_common<D, T>(P, rab, r2, F, vab, rho_a, ira, p_a, R[b], irf_[b], pf_[b], mass_[b], A);
         T tau_b[kS];
         for (int k = 0; k < kS; ++k) tau_b[k] = tau_[k][b];
-        sph::pair_fluid_extras<D, T>(P, rab, r2, F, vab, rho_a, k_a, R[b], mass_[b], tau_a, tau_b, A);
+        sph::pair_fluid_extras<D, T>(P, rab, r2, F, vab, rho_a, k_a, R[b], irf_[b], mass_[b], tau_a, tau_b, A);
       });
       for_pairs(wall_list_, xw_, vw_, xa, va, [&](uint32_t b, const T* rab, T r2, const T* vab, T F) {
-        sph::pair_common<D, T>(P, rab, r2, F, vab, rho_a, p_a, RW[b], pw_[b], mw_, A);
+        sph::pair_common<D, T>(P, rab, r2, F, vab, rho_a, ira, p_a, RW[b], irw_[b], pw_[b], mw_, A);
       });
       for (int d = 0; d < D; ++d) a_[d][a] = A.acc[d] + P.g[d];
       if (!held_.empty()) a_[D - 1][a] += held_[a] * lift;  // the vacuum's hold: f(t) m |g| upward
@@ -466,7 +474,7 @@ class SphSolver final : public Simulation {
       const T rho_k = RW[k], p_k = pw_[k];
       Accum<D, T> A;
       for_pairs(fluid_list_, X, V, xk, vk, [&](uint32_t b, const T* rab, T r2, const T* vab, T F) {
-        sph::pair_common<D, T>(P, rab, r2, F, vab, rho_k, p_k, R[b], pf_[b], mass_[b], A);
+        sph::pair_common<D, T>(P, rab, r2, F, vab, rho_k, irw_[k], p_k, R[b], irf_[b], pf_[b], mass_[b], A);
       });
       drhow_[k] = A.drho;
       for (int d = 0; d < D; ++d) fw_[d][k] = mw_ * A.acc[d];
@@ -575,7 +583,7 @@ class SphSolver final : public Simulation {
   size_t n_ = 0;
   std::vector<T> x_[D], v_[D], rho_, mass_, vol_, held_;
   std::vector<T> xh_[D], vh_[D], rhoh_;
-  std::vector<T> a_[D], drho_, pf_, visc_dt_;
+  std::vector<T> a_[D], drho_, pf_, irf_, visc_dt_;  // pressure and 1/rho of the state last evaluated
   std::vector<int> pairs_;
   std::vector<T> tau_[kS], tau_next_[kS];  // sub-particle stress over rho^2, from the previous evaluation
   std::vector<T> scratch_;
@@ -583,7 +591,7 @@ class SphSolver final : public Simulation {
 
   // Walls: fixed positions and prescribed velocities, density at t and t + dt/2, its rate, pressure, pair force.
   size_t nw_ = 0;
-  std::vector<T> xw_[D], vw_[D], rhow_, rhowh_, drhow_, pw_, fw_[D];
+  std::vector<T> xw_[D], vw_[D], rhow_, rhowh_, drhow_, pw_, irw_, fw_[D];
   std::vector<int> wall_id_;
   T mw_ = 0;
   std::vector<double> load_impulse_;

@@ -12,6 +12,7 @@
 #include <limits>
 #include <string>
 
+#include "common/errors.h"
 #include "solver/scene.h"
 #include "solver/simulation.h"
 #include "test_util.h"
@@ -198,6 +199,27 @@ TEST(SphConservation, LinearMomentumWithoutGravity) {
   for (int d = 0; d < 2; ++d)
     EXPECT_LE(std::fabs(L1[d] - L0[d]), 100 * eps * scale * std::sqrt(double(sim->steps())))
         << "axis " << d;
+}
+
+// solver.method: mpm unless the scene says sph; any other value, and what SPH cannot run yet, is one line of input
+// error naming the field.
+TEST(SphScene, MethodIsReadAndWhatSphLacksIsRefused) {
+  const std::string base = column_scene(2, 0.01, "double", 0.01);
+  EXPECT_EQ(parse_scene_text(base, "c.json").solver.method, SolverMethod::kSph);
+  EXPECT_EQ(parse_scene_text(base, "c.json", {{"solver.method", "mpm"}}).solver.method, SolverMethod::kMpm);
+  try {
+    parse_scene_text(base, "c.json", {{"solver.method", "lbm"}});
+    FAIL() << "solver.method lbm was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("solver.method"), std::string::npos) << e.what();
+  }
+  const Scene mirrored = parse_scene_text(base, "c.json", {{"boundaries.1.condition", "symmetry"}});
+  try {
+    make_simulation(mirrored, kOneThread);
+    FAIL() << "SPH accepted a symmetry plane";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("symmetry"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace
