@@ -119,10 +119,10 @@ FLUME_HD T hydrostatic_density_slope(T rho, T p, const Params<T>& P) {
 
 // Fluid-fluid extras: density diffusion (Fourtakas et al. 2020, delta-SPH on the dynamic density: the
 // hydrostatic part k_a g . r_ab, k_a = hydrostatic_density_slope, is taken out so a still column does not
-// diffuse; with rho0 / c0^2 in place of the local k_a, as in the paper's linearised form, the column settled
-// with a pressure gradient 3 % steeper than rho g at 1 % compression, the Tait law's c^2 being 6 % higher at
-// the bottom), the sub-particle stress (eq. 9's third term, tau / rho^2 held per particle, Dalrymple & Rogers
-// 2006) and the velocity gradient it is computed from next.
+// diffuse; the paper's rho0 / c0^2 is k_a at rho0, and the local k_a keeps the term zero in a hydrostatic column
+// at any compression, where the Tait law's c^2 grows by gamma - 1 times the density's), the sub-particle stress
+// (eq. 9's third term, tau / rho^2 held per particle, Dalrymple & Rogers 2006) and the velocity gradient it is
+// computed from next.
 template <int D, typename T>
 FLUME_HD void pair_fluid_extras(const Params<T>& P, const T* rab, T r2, T F, const T* vab, T rho_a, T k_a,
                                 T rho_b, T inv_rho_b, T m_b, const T* tau_a, const T* tau_b, Accum<D, T>& A) {
