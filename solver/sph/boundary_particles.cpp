@@ -37,7 +37,8 @@ WallParticles make_wall_particles(const Scene& scene, double spacing, int layers
   if (total > max_points)
     throw InputError(scene.file, "solver.dx",
                      "the SPH wall lattice over the domain would hold " + std::to_string(long(total)) +
-                         " points (allowed: at most " + std::to_string(long(max_points)) + "): use a larger dx");
+                         " points (allowed: at most " + std::to_string(long(max_points)) +
+                         "): use a larger dx");
   const std::size_t count = static_cast<std::size_t>(total);
   auto point = [&](std::size_t idx, long* k) {
     Vec3d p{};
@@ -48,7 +49,8 @@ WallParticles make_wall_particles(const Scene& scene, double spacing, int layers
     }
     return p;
   };
-  // near[i]: an open point within `layers` steps on every axis (a box dilation of the open set, axis by axis).
+  // near[i]: an open point within `layers` steps on every axis (a box dilation of the open set, axis by
+  // axis).
   std::vector<uint8_t> near(count);
   const double tol = 1e-9 * spacing;
 #pragma omp parallel for schedule(static)

@@ -1,7 +1,8 @@
-// The wall particles of an SPH run (dynamic boundary conditions, Crespo et al. 2007): the points of the fluid's
-// lattice (spacing s, at (k + 1/2) s from the frame's origin, where water boxes that start on a multiple of s put
-// their particles) that lie in a solid (a boundary box or half-space, or outside the domain) within `layers`
-// lattice steps of open space, enough to fill the kernel's support 2h beside every wall.
+// The wall particles of an SPH run (dynamic boundary conditions, Crespo et al. 2007): the points of the
+// fluid's lattice (spacing s, at (k + 1/2) s from the frame's origin, where water boxes that start on a
+// multiple of s put their particles) that lie in a solid (a boundary box or half-space, or outside the
+// domain) within `layers` lattice steps of open space, enough to fill the kernel's support 2h beside every
+// wall.
 #pragma once
 #include <vector>
 

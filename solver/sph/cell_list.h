@@ -1,7 +1,7 @@
-// Neighbour search by cell lists: cells about h wide, particles ordered by cell (x fastest), so the particles of a
-// row of cells along x are one contiguous range and a neighbourhood of 2h is at most 5^(D-1) ranges, each trimmed
-// to the cells the support reaches in its row. Rebuilt once per step by a counting sort; within the step particles
-// drift less than the search radius' margin over 2h.
+// Neighbour search by cell lists: cells about h wide, particles ordered by cell (x fastest), so the particles
+// of a row of cells along x are one contiguous range and a neighbourhood of 2h is at most 5^(D-1) ranges,
+// each trimmed to the cells the support reaches in its row. Rebuilt once per step by a counting sort; within
+// the step particles drift less than the search radius' margin over 2h.
 #pragma once
 #include <algorithm>
 #include <cmath>
@@ -66,10 +66,12 @@ struct CellList {
   }
 };
 
-// Calls f(begin, end) for the contiguous ranges of `list`'s particles whose cells come within `radius` of the point
-// x: per row of cells along x, only the cells the sphere reaches there (the rows' distance across trims it).
+// Calls f(begin, end) for the contiguous ranges of `list`'s particles whose cells come within `radius` of the
+// point x: per row of cells along x, only the cells the sphere reaches there (the rows' distance across trims
+// it).
 template <int D, typename T, class F>
-inline void for_each_neighbour_range(const CellGrid<D>& g, const CellList& list, const T* x, double radius, const F& f) {
+inline void for_each_neighbour_range(const CellGrid<D>& g, const CellList& list, const T* x, double radius,
+                                     const F& f) {
   double p[D];
   int lo[D], hi[D];
   for (int d = 0; d < D; ++d) {

@@ -1,7 +1,8 @@
 // The weakly compressible SPH physics of one particle pair and one particle, as DualSPHysics runs it in the
-// comparative study (Bonus et al., section 4.2): small inline functions for the host and a CUDA device alike, so
-// the OpenMP loops of sph_solver.cpp and a future CUDA kernel share one definition. Notation: r_ab = x_a - x_b,
-// v_ab = v_a - v_b; the kernel gradient is grad_a W_ab = F(r) r_ab with F < 0 (wendland_gradient_factor).
+// comparative study (Bonus et al., section 4.2): small inline functions for the host and a CUDA device alike,
+// so the OpenMP loops of sph_solver.cpp and a future CUDA kernel share one definition. Notation: r_ab = x_a -
+// x_b, v_ab = v_a - v_b; the kernel gradient is grad_a W_ab = F(r) r_ab with F < 0
+// (wendland_gradient_factor).
 #pragma once
 #include <cmath>
 
@@ -22,20 +23,21 @@ struct Sym {
   }
 };
 
-// Everything a pair interaction reads, in the solver's precision.
+// Everything a pair interaction reads, in the solver's precision. The pair functions take each particle's
+// 1/rho as well as rho (computed once per particle and evaluation: a division per pair less).
 template <typename T>
 struct Params {
   T h = 0, inv_h = 0;
-  T support2 = 0;     // (2h)^2
-  T eta2 = 0;         // 0.01 h^2, keeps 1/r^2 finite
-  T grad_coef = 0;    // -5 alpha_D / h^2: F(q) = grad_coef (1 - q/2)^3
+  T support2 = 0;   // (2h)^2
+  T eta2 = 0;       // 0.01 h^2, keeps 1/r^2 finite
+  T grad_coef = 0;  // -5 alpha_D / h^2: F(q) = grad_coef (1 - q/2)^3
   T rho0 = 0, B = 0, gamma = 0, c0 = 0;
-  T nu = 0;           // laminar kinematic viscosity (m^2/s)
-  T alpha = 0;        // artificial viscosity coefficient; 0: laminar + SPS instead
-  T ddt = 0;          // delta h c0 of the density diffusion term (Fourtakas et al. 2020)
+  T nu = 0;     // laminar kinematic viscosity (m^2/s)
+  T alpha = 0;  // artificial viscosity coefficient; 0: laminar + SPS instead
+  T ddt = 0;    // delta h c0 of the density diffusion term (Fourtakas et al. 2020)
   T g[3] = {0, 0, 0};
-  T sps_cs2 = 0;      // (C_s Delta)^2, Smagorinsky (study eq. 12; C_s = 0.12)
-  T sps_ci = 0;       // 2/3 C_I Delta^2 (study eq. 11; C_I = 0.0066)
+  T sps_cs2 = 0;  // (C_s Delta)^2, Smagorinsky (study eq. 12; C_s = 0.12)
+  T sps_ci = 0;   // 2/3 C_I Delta^2 (study eq. 11; C_I = 0.0066)
 };
 
 // Wendland C2 (quintic) kernel, study eq. 6: W = alpha_D (1 - q/2)^4 (2q + 1), 0 <= q <= 2, with
@@ -63,7 +65,8 @@ template <typename T>
 FLUME_HD T tait_pressure(T rho, const Params<T>& P) {
   return P.B * (std::pow(rho / P.rho0, P.gamma) - T(1));
 }
-// The elastic energy per unit mass stored by the Tait law, int_rho0^rho p / rho^2 drho (for the energy audit).
+// The elastic energy per unit mass stored by the Tait law, int_rho0^rho p / rho^2 drho (for the energy
+// audit).
 inline double tait_energy_per_mass(double rho, double rho0, double B, double gamma) {
   const double r = rho / rho0;
   return B / rho0 * ((std::pow(r, gamma - 1) - 1) / (gamma - 1) + 1 / r - 1);
@@ -80,27 +83,28 @@ struct Accum {
 };
 
 // The terms every pair shares: continuity (study eq. 7, rho_a sum_b m_b / rho_b v_ab . grad W), the symmetric
-// pressure gradient (eq. 9: -sum_b m_b (p_a + p_b) / (rho_a rho_b) grad W) and the viscosity: laminar (Lo & Shao
-// 2002, eq. 9's second term) or Monaghan's artificial viscosity when alpha > 0. v_ab uses a wall particle's
-// prescribed velocity.
+// pressure gradient (eq. 9: -sum_b m_b (p_a + p_b) / (rho_a rho_b) grad W) and the viscosity: laminar (Lo &
+// Shao 2002, eq. 9's second term) or Monaghan's artificial viscosity when alpha > 0. v_ab uses a wall
+// particle's prescribed velocity.
 template <int D, typename T>
-FLUME_HD void pair_common(const Params<T>& P, const T* rab, T r2, T F, const T* vab, T rho_a, T p_a, T rho_b, T p_b,
-                          T m_b, Accum<D, T>& A) {
+FLUME_HD void pair_common(const Params<T>& P, const T* rab, T r2, T F, const T* vab, T rho_a, T inv_rho_a,
+                          T p_a, T rho_b, T inv_rho_b, T p_b, T m_b, Accum<D, T>& A) {
   T dot = 0;
   for (int d = 0; d < D; ++d) dot += vab[d] * rab[d];
-  A.drho += m_b * F * dot * (rho_a / rho_b);
+  const T mF = m_b * F;
+  A.drho += mF * dot * (rho_a * inv_rho_b);
   const T inv_r2 = T(1) / (r2 + P.eta2);
   const T vdt = std::fabs(dot) * inv_r2;
   A.visc_dt = vdt > A.visc_dt ? vdt : A.visc_dt;
-  T press = -m_b * (p_a + p_b) / (rho_a * rho_b) * F;
+  T press = -mF * (p_a + p_b) * (inv_rho_a * inv_rho_b);
   if (P.alpha > T(0)) {
     if (dot < T(0)) {  // approaching pairs only (Monaghan 1992): Pi_ab = -alpha c0 mu / rho_mean
       const T mu = P.h * dot * inv_r2;
-      press -= m_b * (-P.alpha * P.c0 * mu / (T(0.5) * (rho_a + rho_b))) * F;
+      press += mF * P.alpha * P.c0 * mu / (T(0.5) * (rho_a + rho_b));
     }
     for (int d = 0; d < D; ++d) A.acc[d] += press * rab[d];
   } else {
-    const T lam = m_b * T(4) * P.nu * F * r2 * inv_r2 / (rho_a + rho_b);
+    const T lam = mF * T(4) * P.nu * r2 * inv_r2 / (rho_a + rho_b);
     for (int d = 0; d < D; ++d) A.acc[d] += press * rab[d] + lam * vab[d];
   }
   ++A.pairs;
@@ -114,18 +118,18 @@ FLUME_HD T hydrostatic_density_slope(T rho, T p, const Params<T>& P) {
 }
 
 // Fluid-fluid extras: density diffusion (Fourtakas et al. 2020, delta-SPH on the dynamic density: the
-// hydrostatic part k_a g . r_ab, k_a = hydrostatic_density_slope, is taken out so a still column does not diffuse;
-// with rho0 / c0^2 in place of the local k_a, as in the paper's linearised form, the column settled with a pressure
-// gradient 3 % steeper than rho g at 1 % compression, the Tait law's c^2 being 6 % higher at the bottom), the
-// sub-particle stress (eq. 9's third term, tau / rho^2 held per particle, Dalrymple & Rogers 2006) and the
-// velocity gradient it is computed from next.
+// hydrostatic part k_a g . r_ab, k_a = hydrostatic_density_slope, is taken out so a still column does not
+// diffuse; the paper's rho0 / c0^2 is k_a at rho0, and the local k_a keeps the term zero in a hydrostatic column
+// at any compression, where the Tait law's c^2 grows by gamma - 1 times the density's), the sub-particle stress
+// (eq. 9's third term, tau / rho^2 held per particle, Dalrymple & Rogers 2006) and the velocity gradient it is
+// computed from next.
 template <int D, typename T>
-FLUME_HD void pair_fluid_extras(const Params<T>& P, const T* rab, T r2, T F, const T* vab, T rho_a, T k_a, T rho_b,
-                                T m_b, const T* tau_a, const T* tau_b, Accum<D, T>& A) {
+FLUME_HD void pair_fluid_extras(const Params<T>& P, const T* rab, T r2, T F, const T* vab, T rho_a, T k_a,
+                                T rho_b, T inv_rho_b, T m_b, const T* tau_a, const T* tau_b, Accum<D, T>& A) {
   T g_dot_r = 0;
   for (int d = 0; d < D; ++d) g_dot_r += P.g[d] * rab[d];
   const T drho_dyn = (rho_a - rho_b) - k_a * g_dot_r;
-  const T V_b = m_b / rho_b;
+  const T V_b = m_b * inv_rho_b;
   A.drho += P.ddt * T(2) * drho_dyn * F * r2 / (r2 + P.eta2) * V_b;
   if (P.alpha > T(0)) return;
   for (int i = 0; i < D; ++i) {
@@ -174,8 +178,8 @@ FLUME_HD void correct(T& x, T& v, T a, T dt) {
   x += T(0.5) * dt * (v + v1);
   v = v1;
 }
-// Density: rho1 = rho0 (2 - eps) / (2 + eps), eps = -drho_half / rho_half dt (exact for a constant rate of the
-// logarithm of the density, as DualSPHysics integrates it).
+// Density: rho1 = rho0 (2 - eps) / (2 + eps), eps = -drho_half / rho_half dt (exact for a constant rate of
+// the logarithm of the density, as DualSPHysics integrates it).
 template <typename T>
 FLUME_HD T correct_density(T rho, T rho_half, T drho_half, T dt) {
   const T eps = -drho_half / rho_half * dt;

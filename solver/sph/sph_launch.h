@@ -1,5 +1,5 @@
-// The one place SPH's loops are launched: an OpenMP loop over particles today; a CUDA kernel launch can take its
-// place later without touching the physics (sph_kernels.h) or the loop bodies.
+// The one place SPH's loops are launched: an OpenMP loop over particles today; a CUDA kernel launch can take
+// its place later without touching the physics (sph_kernels.h) or the loop bodies.
 #pragma once
 #include <cstddef>
 

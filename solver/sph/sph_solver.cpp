@@ -1,11 +1,12 @@
 // Weakly compressible SPH on the CPU (OpenMP), the second method beside MPM (docs/sph.md): DualSPHysics'
-// formulation as the comparative study ran it (section 4.2). The physics is in sph_kernels.h; this file holds the
-// particle arrays, the neighbour search (cell_list.h), the symplectic step and the plumbing to the instruments.
+// formulation as the comparative study ran it (section 4.2). The physics is in sph_kernels.h; this file holds
+// the particle arrays, the neighbour search (cell_list.h), the symplectic step and the plumbing to the
+// instruments.
 //
-// Fluid particles are stored as structure-of-arrays and re-sorted by cell at the start of every step; the wall
-// particles (dynamic boundary particles: fixed, their density evolved by continuity and floored at rho0) are sorted
-// once. Each loop body reads its neighbours and writes only its own particle: race-free without atomics, and the
-// result does not depend on the number of threads.
+// Fluid particles are stored as structure-of-arrays and re-sorted by cell at the start of every step; the
+// wall particles (dynamic boundary particles: fixed, their density evolved by continuity and floored at rho0)
+// are sorted once. Each loop body reads its neighbours and writes only its own particle: race-free without
+// atomics, and the result does not depend on the number of threads.
 #include <omp.h>
 
 #include <algorithm>
@@ -14,6 +15,7 @@
 #include <sstream>
 
 #include "common/errors.h"
+#include "solver/checkpoint.h"
 #include "solver/instruments.h"
 #include "solver/seeding.h"
 #include "solver/simulation.h"
@@ -28,8 +30,9 @@ namespace {
 using sph::Accum;
 using sph::Sym;
 
-// Particles are sorted into cells at the start of a step and drift at most kDriftOverH h from there within it (the
-// step is bounded so): the search reaches 2h plus that from a particle's present position to its neighbours' cells.
+// Particles are sorted into cells at the start of a step and drift at most kDriftOverH h from there within it
+// (the step is bounded so): the search reaches 2h plus that from a particle's present position to its
+// neighbours' cells.
 constexpr double kCellOverH = 1.0;
 constexpr double kDriftOverH = 0.05;
 
@@ -48,9 +51,9 @@ class SphSolver final : public Simulation {
     seed_walls();
     const Energy e = energy();
     energy0_ = e.total();
-    // Slack of the energy audit, as MPM's: SPH with viscosity and density diffusion dissipates, so the total may
-    // grow only by round-off and the settling of the walls; 1 % of the energy of lifting the water by its own
-    // height bounds that, and a blow-up grows past it within a few steps.
+    // Slack of the energy audit, as MPM's: SPH with viscosity and density diffusion dissipates, so the total
+    // may grow only by round-off and the settling of the walls; 1 % of the energy of lifting the water by its
+    // own height bounds that, and a blow-up grows past it within a few steps.
     double zmin = 1e300, zmax = -1e300;
     for (const auto& w : scene.water) {
       zmin = std::min(zmin, w.lo[D - 1]);
@@ -86,7 +89,8 @@ class SphSolver final : public Simulation {
     double hold_work = 0;
     if (!held_.empty()) {
 #pragma omp parallel for reduction(+ : hold_work) schedule(static)
-      for (long i = 0; i < long(n_); ++i) hold_work += double(held_[i] * mass_[i]) * lift * double(vh_[D - 1][i]) * dt;
+      for (long i = 0; i < long(n_); ++i)
+        hold_work += double(held_[i] * mass_[i]) * lift * double(vh_[D - 1][i]) * dt;
     }
     energy0_ += hold_work;
     sph::parallel_for(n_, [&](size_t i) {
@@ -184,6 +188,12 @@ class SphSolver final : public Simulation {
     energy_slack_ = std::max(energy_slack_, 0.01 * e.kinetic);
   }
 
+  void checkpoint(StateArchive& ar) override {
+    throw InputError(
+        ar.file().empty() ? std::string("--checkpoint-every") : ar.file(), "solver.method",
+        "SPH does not checkpoint yet: run without --checkpoint-every/--resume, or with solver.method mpm");
+  }
+
   // --- read access for the instruments ---
   int dim() const { return D; }
   size_t n() const { return n_; }
@@ -217,8 +227,10 @@ class SphSolver final : public Simulation {
  private:
   void refuse_unsupported() const {
     const std::string why = " (solver.method sph; docs/sph.md lists what SPH does not do yet)";
-    if (scene_.debris.present) throw InputError(scene_.file, "debris", "SPH does not couple debris yet" + why);
-    if (scene_.inflow.present) throw InputError(scene_.file, "inflow", "SPH has no inflow boundary yet" + why);
+    if (scene_.debris.present)
+      throw InputError(scene_.file, "debris", "SPH does not couple debris yet" + why);
+    if (scene_.inflow.present)
+      throw InputError(scene_.file, "inflow", "SPH has no inflow boundary yet" + why);
     for (const auto& b : scene_.boundaries)
       if (b.condition == BoundaryCondition::kSymmetry)
         throw InputError(scene_.file, "boundaries." + b.name + ".condition",
@@ -242,7 +254,8 @@ class SphSolver final : public Simulation {
     Pd_.B = c0 * c0 * f.density / f.gamma;
     Pd_.nu = f.viscosity / f.density;
     Pd_.alpha = s.viscosity == SphViscosity::kArtificial ? s.artificial_alpha : 0.0;
-    // alpha = 0 selects laminar + SPS in the pair terms; an artificial viscosity of exactly 0 means none at all.
+    // alpha = 0 selects laminar + SPS in the pair terms; an artificial viscosity of exactly 0 means none at
+    // all.
     artificial_ = s.viscosity == SphViscosity::kArtificial;
     if (artificial_ && Pd_.alpha == 0) Pd_.nu = 0;
     Pd_.ddt = s.density_diffusion * h_ * c0;
@@ -275,7 +288,8 @@ class SphSolver final : public Simulation {
     n_ = seeds.size();
     if (n_ == 0) throw InputError(scene_.file, "water", "no water to simulate");
     if (n_ > std::numeric_limits<uint32_t>::max() / 2)
-      throw InputError(scene_.file, "solver.dx", "too many particles for SPH's 32-bit indices: use a larger dx");
+      throw InputError(scene_.file, "solver.dx",
+                       "too many particles for SPH's 32-bit indices: use a larger dx");
     const double rho0 = scene_.fluid.density;
     for (int d = 0; d < D; ++d) {
       x_[d].assign(seeds.x[d].begin(), seeds.x[d].end());
@@ -297,6 +311,7 @@ class SphSolver final : public Simulation {
     rhoh_.resize(n_);
     drho_.resize(n_);
     pf_.resize(n_);
+    irf_.resize(n_);
     visc_dt_.resize(n_);
     pairs_.resize(n_);
     for (int k = 0; k < kS; ++k) {
@@ -314,7 +329,8 @@ class SphSolver final : public Simulation {
       hi[d] = scene_.domain_hi[d] + (layers + 2) * spacing_;
     }
     if (!grid_.init(lo, hi, kCellOverH * h_, size_t(1) << 31))
-      throw InputError(scene_.file, "solver.dx", "the SPH cell grid over the domain would exceed 2^31 cells: use a larger dx");
+      throw InputError(scene_.file, "solver.dx",
+                       "the SPH cell grid over the domain would exceed 2^31 cells: use a larger dx");
     nw_ = w.size();
     // Sorted by cell once: the walls do not move.
     wall_list_.cell.resize(nw_);
@@ -322,7 +338,8 @@ class SphSolver final : public Simulation {
       T p[D];
       int c[D];
       for (int d = 0; d < D; ++d) p[d] = T(w.x[d][k]);
-      if (!grid_.cell_of(p, c)) throw InputError(scene_.file, "domain", "a wall particle lies outside the SPH grid");
+      if (!grid_.cell_of(p, c))
+        throw InputError(scene_.file, "domain", "a wall particle lies outside the SPH grid");
       wall_list_.cell[k] = static_cast<uint32_t>(grid_.index(c));
     }
     wall_list_.build(grid_.count);
@@ -346,6 +363,7 @@ class SphSolver final : public Simulation {
     rhowh_.assign(nw_, T(scene_.fluid.density));
     drhow_.assign(nw_, T(0));
     pw_.assign(nw_, T(0));
+    irw_.assign(nw_, T(1) / T(scene_.fluid.density));
     mw_ = T(scene_.fluid.density * std::pow(spacing_, D));
     for (int d = 0; d < D; ++d) fw_[d].assign(nw_, T(0));
     load_impulse_.assign(scene_.boundaries.size() * D, 0.0);
@@ -409,12 +427,19 @@ class SphSolver final : public Simulation {
     return held_.empty() ? 0.0 : scene_.basin.forcing.hold(t) * std::fabs(scene_.solver.gravity[D - 1]);
   }
 
-  // The rates at one state: accelerations and density rates of the fluid, density rates and forces of the walls.
-  void evaluate(const std::vector<T>* X, const std::vector<T>* V, const std::vector<T>& R, const std::vector<T>& RW,
-                double t) {
+  // The rates at one state: accelerations and density rates of the fluid, density rates and forces of the
+  // walls.
+  void evaluate(const std::vector<T>* X, const std::vector<T>* V, const std::vector<T>& R,
+                const std::vector<T>& RW, double t) {
     const sph::Params<T> P = P_;
-    sph::parallel_for(n_, [&](size_t i) { pf_[i] = sph::tait_pressure(R[i], P); });
-    sph::parallel_for(nw_, [&](size_t k) { pw_[k] = sph::tait_pressure(RW[k], P); });
+    sph::parallel_for(n_, [&](size_t i) {
+      pf_[i] = sph::tait_pressure(R[i], P);
+      irf_[i] = T(1) / R[i];
+    });
+    sph::parallel_for(nw_, [&](size_t k) {
+      pw_[k] = sph::tait_pressure(RW[k], P);
+      irw_[k] = T(1) / RW[k];
+    });
     const T lift = T(hold_lift(t));
     const bool sps = !artificial_;
     sph::parallel_for(n_, [&](size_t a) {
@@ -423,39 +448,19 @@ class SphSolver final : public Simulation {
         xa[d] = X[d][a];
         va[d] = V[d][a];
       }
-      const T rho_a = R[a], p_a = pf_[a], k_a = sph::hydrostatic_density_slope(rho_a, p_a, P);
+      const T rho_a = R[a], ira = irf_[a], p_a = pf_[a], k_a = sph::hydrostatic_density_slope(rho_a, p_a, P);
       T tau_a[kS];
       for (int k = 0; k < kS; ++k) tau_a[k] = tau_[k][a];
       Accum<D, T> A;
-      sph::for_each_neighbour_range<D>(grid_, fluid_list_, xa, search_, [&](uint32_t b0, uint32_t b1) {
-        for (uint32_t b = b0; b < b1; ++b) {
-          T rab[D], r2 = 0;
-          for (int d = 0; d < D; ++d) {
-            rab[d] = xa[d] - X[d][b];
-            r2 += rab[d] * rab[d];
-          }
-          if (r2 >= P.support2 || b == a) continue;
-          T vab[D], tau_b[kS];
-          for (int d = 0; d < D; ++d) vab[d] = va[d] - V[d][b];
-          const T F = sph::wendland_gradient_factor(r2, P);
-          sph::pair_common<D, T>(P, rab, r2, F, vab, rho_a, p_a, R[b], pf_[b], mass_[b], A);
-          for (int k = 0; k < kS; ++k) tau_b[k] = tau_[k][b];
-          sph::pair_fluid_extras<D, T>(P, rab, r2, F, vab, rho_a, k_a, R[b], mass_[b], tau_a, tau_b, A);
-        }
+      for_pairs(fluid_list_, X, V, xa, va, [&](uint32_t b, const T* rab, T r2, const T* vab, T F) {
+        sph::pair_common<D, T>(P, rab, r2, F, vab, rho_a, ira, p_a, R[b], irf_[b], pf_[b], mass_[b], A);
+        T tau_b[kS];
+        for (int k = 0; k < kS; ++k) tau_b[k] = tau_[k][b];
+        sph::pair_fluid_extras<D, T>(P, rab, r2, F, vab, rho_a, k_a, R[b], irf_[b], mass_[b], tau_a, tau_b,
+                                     A);
       });
-      sph::for_each_neighbour_range<D>(grid_, wall_list_, xa, search_, [&](uint32_t b0, uint32_t b1) {
-        for (uint32_t b = b0; b < b1; ++b) {
-          T rab[D], r2 = 0;
-          for (int d = 0; d < D; ++d) {
-            rab[d] = xa[d] - xw_[d][b];
-            r2 += rab[d] * rab[d];
-          }
-          if (r2 >= P.support2) continue;
-          T vab[D];
-          for (int d = 0; d < D; ++d) vab[d] = va[d] - vw_[d][b];
-          const T F = sph::wendland_gradient_factor(r2, P);
-          sph::pair_common<D, T>(P, rab, r2, F, vab, rho_a, p_a, RW[b], pw_[b], mw_, A);
-        }
+      for_pairs(wall_list_, xw_, vw_, xa, va, [&](uint32_t b, const T* rab, T r2, const T* vab, T F) {
+        sph::pair_common<D, T>(P, rab, r2, F, vab, rho_a, ira, p_a, RW[b], irw_[b], pw_[b], mw_, A);
       });
       for (int d = 0; d < D; ++d) a_[d][a] = A.acc[d] + P.g[d];
       if (!held_.empty()) a_[D - 1][a] += held_[a] * lift;  // the vacuum's hold: f(t) m |g| upward
@@ -480,19 +485,8 @@ class SphSolver final : public Simulation {
       }
       const T rho_k = RW[k], p_k = pw_[k];
       Accum<D, T> A;
-      sph::for_each_neighbour_range<D>(grid_, fluid_list_, xk, search_, [&](uint32_t b0, uint32_t b1) {
-        for (uint32_t b = b0; b < b1; ++b) {
-          T rab[D], r2 = 0;
-          for (int d = 0; d < D; ++d) {
-            rab[d] = xk[d] - X[d][b];
-            r2 += rab[d] * rab[d];
-          }
-          if (r2 >= P.support2) continue;
-          T vab[D];
-          for (int d = 0; d < D; ++d) vab[d] = vk[d] - V[d][b];
-          const T F = sph::wendland_gradient_factor(r2, P);
-          sph::pair_common<D, T>(P, rab, r2, F, vab, rho_k, p_k, R[b], pf_[b], mass_[b], A);
-        }
+      for_pairs(fluid_list_, X, V, xk, vk, [&](uint32_t b, const T* rab, T r2, const T* vab, T F) {
+        sph::pair_common<D, T>(P, rab, r2, F, vab, rho_k, irw_[k], p_k, R[b], irf_[b], pf_[b], mass_[b], A);
       });
       drhow_[k] = A.drho;
       for (int d = 0; d < D; ++d) fw_[d][k] = mw_ * A.acc[d];
@@ -501,6 +495,27 @@ class SphSolver final : public Simulation {
 #pragma omp parallel for reduction(+ : pairs) schedule(static)
     for (long i = 0; i < long(n_); ++i) pairs += pairs_[i];
     interactions_ += pairs;
+  }
+
+  // Calls body(b, r_ab, r^2, v_ab, F) for every particle b of `list` (positions X, velocities V) within the
+  // kernel's support of the point xa moving at va, F the kernel gradient's factor. A particle at xa itself
+  // (the particle whose neighbours these are) is left out: its terms are all zero.
+  template <class Body>
+  void for_pairs(const sph::CellList& list, const std::vector<T>* X, const std::vector<T>* V, const T* xa,
+                 const T* va, const Body& body) const {
+    sph::for_each_neighbour_range<D>(grid_, list, xa, search_, [&](uint32_t b0, uint32_t b1) {
+      for (uint32_t b = b0; b < b1; ++b) {
+        T rab[D], r2 = 0;
+        for (int d = 0; d < D; ++d) {
+          rab[d] = xa[d] - X[d][b];
+          r2 += rab[d] * rab[d];
+        }
+        if (r2 >= P_.support2 || r2 == T(0)) continue;
+        T vab[D];
+        for (int d = 0; d < D; ++d) vab[d] = va[d] - V[d][b];
+        body(b, rab, r2, vab, sph::wendland_gradient_factor(r2, P_));
+      }
+    });
   }
 
   // DualSPHysics' step condition from the rates just evaluated, bounded by the scene's max_dt and by the
@@ -549,7 +564,8 @@ class SphSolver final : public Simulation {
     std::ostringstream s;
     s.precision(4);
     if (!finite) {
-      s << "NaN or Inf in the particles at t = " << time_ << " s (step " << steps_ << ", dt = " << dt << " s)";
+      s << "NaN or Inf in the particles at t = " << time_ << " s (step " << steps_ << ", dt = " << dt
+        << " s)";
       fail(s.str());
       return;
     }
@@ -557,7 +573,8 @@ class SphSolver final : public Simulation {
     const double e = last_energy_.total();
     if (e > energy0_ + energy_slack_) {
       s << "energy grew beyond what gravity and forcing supply at t = " << time_ << " s (step " << steps_
-        << "): total " << e << " J against " << energy0_ << " J initially (max speed " << max_speed_ << " m/s)";
+        << "): total " << e << " J against " << energy0_ << " J initially (max speed " << max_speed_
+        << " m/s)";
       fail(s.str());
     }
   }
@@ -580,15 +597,16 @@ class SphSolver final : public Simulation {
   size_t n_ = 0;
   std::vector<T> x_[D], v_[D], rho_, mass_, vol_, held_;
   std::vector<T> xh_[D], vh_[D], rhoh_;
-  std::vector<T> a_[D], drho_, pf_, visc_dt_;
+  std::vector<T> a_[D], drho_, pf_, irf_, visc_dt_;  // pressure and 1/rho of the state last evaluated
   std::vector<int> pairs_;
   std::vector<T> tau_[kS], tau_next_[kS];  // sub-particle stress over rho^2, from the previous evaluation
   std::vector<T> scratch_;
   double mass_total_ = 0;
 
-  // Walls: fixed positions and prescribed velocities, density at t and t + dt/2, its rate, pressure, pair force.
+  // Walls: fixed positions and prescribed velocities, density at t and t + dt/2, its rate, pressure, pair
+  // force.
   size_t nw_ = 0;
-  std::vector<T> xw_[D], vw_[D], rhow_, rhowh_, drhow_, pw_, fw_[D];
+  std::vector<T> xw_[D], vw_[D], rhow_, rhowh_, drhow_, pw_, irw_, fw_[D];
   std::vector<int> wall_id_;
   T mw_ = 0;
   std::vector<double> load_impulse_;

@@ -1,6 +1,6 @@
-// Martin & Moyce (1952), n^2 = 2: the surge front of a collapsing water column, for the MPM and SPH tests. The
-// front Z = z/a against T = t sqrt(2g/a) is compared with Table 2 after one time shift (the experiment's gate
-// opened with a lag).
+// Martin & Moyce (1952), n^2 = 2: the surge front of a collapsing water column, for the MPM and SPH tests.
+// The front Z = z/a against T = t sqrt(2g/a) is compared with Table 2 after one time shift (the experiment's
+// gate opened with a lag).
 #pragma once
 #include <algorithm>
 #include <cmath>
@@ -25,7 +25,8 @@ struct FrontCurve {
   }
 };
 
-// Steps the simulation to its end, recording the front: the leading particle's edge, half a spacing ahead of it.
+// Steps the simulation to its end, recording the front: the leading particle's edge, half a spacing ahead of
+// it.
 inline RunStatus record_front(Simulation& sim, double spacing, FrontCurve& c) {
   const double t_scale = std::sqrt(2 * kMmG / kMmA);
   std::vector<double> xyz;

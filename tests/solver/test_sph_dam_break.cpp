@@ -4,8 +4,8 @@
 // The sound speed is 20 m/s, ten times the front's largest speed (about sqrt(2 g 2a) = 1.5 m/s, DualSPHysics'
 // coefsound 10 on the column's height): the scene's 2e6 Pa (45 m/s) only shortens the step. Tolerance: the
 // RMS of Z after the best shift within +-0.2, at most 0.15 at the finer spacing, MPM's bound at a/40 (the
-// experiment's own scatter about a smooth front is about 0.1 in Z); and the front is located to within a kernel
-// support 2h, so the two resolutions must agree to 2h / a at the coarser (0.14 in Z).
+// experiment's own scatter about a smooth front is about 0.1 in Z); and the front is located to within a
+// kernel support 2h, so the two resolutions must agree to 2h / a at the coarser (0.14 in Z).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -20,7 +20,8 @@ namespace flume {
 namespace {
 
 // One thread: these runs are small enough that a second thread's barriers cost more than it gains on a shared
-// machine (the SPH loops give the same result for any thread count: each particle gathers from its neighbours).
+// machine (the SPH loops give the same result for any thread count: each particle gathers from its
+// neighbours).
 const SimulationOptions kOneThread{Backend::kCpu, 1};
 
 test::FrontCurve simulate_front(double dx) {
@@ -44,8 +45,8 @@ TEST(SphMartinMoyce, FrontMatchesTable2) {
   const test::FrontCurve coarse = simulate_front(a / 10), fine = simulate_front(a / 20);
   const test::Fit fc = test::fit_shift(coarse, data), ff = test::fit_shift(fine, data);
   const double diff = test::front_difference(coarse, fine);
-  std::printf("SPH dx = a/10: RMS(Z) = %.4f at dT = %+.3f; dx = a/20: %.4f at %+.3f; |a/10 - a/20| = %.4f\n", fc.rms,
-              fc.shift, ff.rms, ff.shift, diff);
+  std::printf("SPH dx = a/10: RMS(Z) = %.4f at dT = %+.3f; dx = a/20: %.4f at %+.3f; |a/10 - a/20| = %.4f\n",
+              fc.rms, fc.shift, ff.rms, ff.shift, diff);
   EXPECT_LE(ff.rms, 0.15) << "front RMS error against Martin & Moyce Table 2";
   const double h_coarse = std::sqrt(2.0) * a / 20;  // coefh 1: h = sqrt(2) spacing in 2D
   EXPECT_LE(diff, 2 * h_coarse / a);
