@@ -494,3 +494,31 @@ TEST(CampaignSpecErrors, ReadOnlyDatabaseIsRefusedNamingTheFile) {
   EXPECT_EQ(r.err.rfind(db.string() + ": ", 0), 0u) << r.err;
   EXPECT_EQ(read_file(db), before);
 }
+
+// Issue 29: a run stopped by SIGTERM (as the end of a batch allocation stops every process of the job, the
+// runs first) did not finish: the campaign puts it back to pending and runs it again, instead of recording it
+// `failed` for good as it did.
+TEST(CampaignFailures, RunStoppedBySigtermIsRunAgainNotRecordedFailed) {
+  const fs::path dir = test_dir();
+  const fs::path spec = dir / "spec.json", db = dir / "study.db";
+  write_file(spec, test_spec("term", 1, 2.0));
+  const pid_t campaign = spawn(flume_cmd({"campaign", "run", spec.string(), "--db", db.string()}), dir / "out.log",
+                               dir / "err.log");
+  ASSERT_GT(campaign, 0);
+  // The run's process: the campaign's child (its own process group, so only it gets the signal).
+  pid_t run_pid = -1;
+  for (int k = 0; k < 400 && run_pid < 0; ++k) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(25));
+    for (const auto& e : fs::directory_iterator("/proc")) {
+      std::ifstream stat(e.path() / "stat");
+      std::string pid, comm, state;
+      long ppid = 0;
+      if (stat >> pid >> comm >> state >> ppid && ppid == campaign) run_pid = std::stoi(pid);
+    }
+  }
+  ASSERT_GT(run_pid, 0) << "the campaign started no run";
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  kill(run_pid, SIGTERM);
+  ASSERT_EQ(wait_for(campaign, 60), 0) << read_file(dir / "err.log");
+  EXPECT_EQ(scalar(db, "SELECT status || ' ' || attempts FROM runs"), "ok 2");
+}
