@@ -40,6 +40,15 @@ int parse_int(const char* flag, const char* text, long lo, long hi) {
   return static_cast<int>(v);
 }
 
+// Wall-clock seconds in [lo, 1e7] (`lo_text` is lo as the message prints it).
+double parse_seconds(const char* flag, const char* text, double lo, const char* lo_text) {
+  char* end = nullptr;
+  const double v = std::strtod(text, &end);
+  if (*end || !(v >= lo && v <= 1e7))
+    throw InputError(flag, "", std::string("expects wall-clock seconds in [") + lo_text + ", 1e7] (got '" + text + "')");
+  return v;
+}
+
 // Parses the options shared by the solver's commands. `need_out`/`need_steps` say which are required.
 Args parse_args(int argc, char** argv, bool need_out, bool need_steps) {
   Args a;
@@ -69,19 +78,9 @@ Args parse_args(int argc, char** argv, bool need_out, bool need_steps) {
         throw InputError("--backend", "", "must be cpu or cuda (got '" + b + "')");
       }
     } else if (s == "--checkpoint-every") {
-      const char* text = value("--checkpoint-every");
-      char* end = nullptr;
-      const double v = std::strtod(text, &end);
-      if (*end || !(v >= 1 && v <= 1e7))
-        throw InputError("--checkpoint-every", "", std::string("expects wall-clock seconds in [1, 1e7] (got '") + text + "')");
-      a.checkpoints.every_s = v;
+      a.checkpoints.every_s = parse_seconds("--checkpoint-every", value("--checkpoint-every"), 1, "1");
     } else if (s == "--flush-every") {
-      const char* text = value("--flush-every");
-      char* end = nullptr;
-      const double v = std::strtod(text, &end);
-      if (*end || !(v >= 0.1 && v <= 1e7))
-        throw InputError("--flush-every", "", std::string("expects wall-clock seconds in [0.1, 1e7] (got '") + text + "')");
-      a.flush_every_s = v;
+      a.flush_every_s = parse_seconds("--flush-every", value("--flush-every"), 0.1, "0.1");
     } else if (s == "--resume") {
       a.checkpoints.resume = true;
     } else if (s == "--quiet" || s == "-q") {
