@@ -256,6 +256,7 @@ int run_campaign(const CampaignSpec& spec, const EngineOptions& options, int mpi
     constexpr std::int64_t kMaxInterruptions = 3;
     if (out.interrupted && t.attempt < kMaxInterruptions) {
       db.release_run(t.run_id);
+      exhausted = false;  // a pending run again, for the next free slot
       return false;
     }
     if (out.interrupted)

@@ -1,6 +1,9 @@
 // `flume campaign` end to end on the analytic models: each test runs the real executable as a user would.
 #include <gtest/gtest.h>
+#include <fcntl.h>
+#include <linux/fs.h>
 #include <signal.h>
+#include <sys/ioctl.h>
 #include <sqlite3.h>
 #include <unistd.h>
 
@@ -469,28 +472,73 @@ TEST(CampaignSpecErrors, DotNamesAndUnwritableRunFolderAreRefusedBeforeRegisteri
   EXPECT_FALSE(fs::exists(dir / "study.db.runs" / "run-000000"));
 }
 
-// Issue 29: a database the job cannot write is refused in one line naming it, before anything runs. Root
-// writes through any mode bits, so there the read-only cases cannot be made and are skipped.
+// Makes `p` (a file or a folder) unwritable, or writable again. Root writes through mode bits, so for root the
+// inode's immutable flag is used (chattr +i); false when the filesystem has none.
+bool set_read_only(const fs::path& p, bool on) {
+  if (geteuid() != 0) {
+    const bool dir = fs::is_directory(p);
+    fs::permissions(p, on ? (fs::perms::owner_read | (dir ? fs::perms::owner_exec : fs::perms::none))
+                          : fs::perms::owner_all);
+    return true;
+  }
+  const int fd = open(p.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+  if (fd < 0) return false;
+  int flags = 0;
+  bool ok = ioctl(fd, FS_IOC_GETFLAGS, &flags) == 0;
+  flags = on ? (flags | FS_IMMUTABLE_FL) : (flags & ~FS_IMMUTABLE_FL);
+  ok = ok && ioctl(fd, FS_IOC_SETFLAGS, &flags) == 0;
+  close(fd);
+  return ok;
+}
+
+// Issue 29: a database the job cannot write (the file, or the folder where SQLite makes its -wal and -shm
+// files) is refused in one line naming it, exit 2, before anything runs; it was an internal error (exit 1)
+// quoting SQL ("attempt to write a readonly database") without the file's name.
 TEST(CampaignSpecErrors, ReadOnlyDatabaseIsRefusedNamingTheFile) {
-  if (geteuid() == 0) GTEST_SKIP() << "root writes a read-only file";
   const fs::path dir = test_dir();
-  const fs::path db = dir / "study.db";
-  write_file(dir / "a.json", test_spec("a", 2, 0.0));
-  ASSERT_EQ(run(flume_cmd({"campaign", "run", (dir / "a.json").string(), "--db", db.string()}), dir).rc, 0);
+  const fs::path db = dir / "study.db", specs = dir / "specs";
+  fs::create_directories(specs);
+  write_file(specs / "a.json", test_spec("a", 2, 0.0));
+  ASSERT_EQ(run(flume_cmd({"campaign", "run", (specs / "a.json").string(), "--db", db.string()}), specs).rc, 0);
   const std::string before = read_file(db);
-  write_file(dir / "b.json", test_spec("b", 2, 0.0));
-  fs::permissions(db, fs::perms::owner_read | fs::perms::group_read | fs::perms::others_read);
-  Result r = run(flume_cmd({"campaign", "run", (dir / "b.json").string(), "--db", db.string()}), dir);
-  EXPECT_EQ(r.rc, 2) << r.err;
-  EXPECT_EQ(r.err.rfind(db.string() + ": ", 0), 0u) << r.err;
-  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
-  EXPECT_EQ(read_file(db), before);
-  // A writable file in a folder where SQLite cannot make its -wal and -shm files.
-  fs::permissions(db, fs::perms::owner_read | fs::perms::owner_write);
-  fs::permissions(dir, fs::perms::owner_read | fs::perms::owner_exec);
-  r = run(flume_cmd({"campaign", "run", (dir / "b.json").string(), "--db", db.string()}), dir / "..");
-  fs::permissions(dir, fs::perms::owner_all);
-  EXPECT_EQ(r.rc, 2) << r.err;
-  EXPECT_EQ(r.err.rfind(db.string() + ": ", 0), 0u) << r.err;
-  EXPECT_EQ(read_file(db), before);
+  write_file(specs / "b.json", test_spec("b", 2, 0.0));
+  for (const fs::path& locked : {db, dir}) {
+    if (!set_read_only(locked, true)) GTEST_SKIP() << "this filesystem cannot make a file read-only for root";
+    const Result r = run(flume_cmd({"campaign", "run", (specs / "b.json").string(), "--db", db.string()}), specs);
+    set_read_only(locked, false);
+    EXPECT_EQ(r.rc, 2) << locked << ": " << r.err;
+    EXPECT_EQ(r.err.rfind(db.string() + ": ", 0), 0u) << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    EXPECT_EQ(read_file(db), before);
+    EXPECT_FALSE(fs::exists(db.string() + ".runs/b"));
+  }
+}
+
+// Issue 29: a run stopped by SIGTERM (as the end of a batch allocation stops every process of the job, the
+// runs first) did not finish: the campaign puts it back to pending and runs it again, instead of recording it
+// `failed` for good as it did.
+TEST(CampaignFailures, RunStoppedBySigtermIsRunAgainNotRecordedFailed) {
+  const fs::path dir = test_dir();
+  const fs::path spec = dir / "spec.json", db = dir / "study.db";
+  write_file(spec, test_spec("term", 1, 2.0));
+  // Two workers for one run: the second finds no run to claim, and the stopped run must still be picked up.
+  const pid_t campaign = spawn(flume_cmd({"campaign", "run", spec.string(), "--db", db.string(), "--workers", "2"}),
+                               dir / "out.log", dir / "err.log");
+  ASSERT_GT(campaign, 0);
+  // The run's process: the campaign's child (its own process group, so only it gets the signal).
+  pid_t run_pid = -1;
+  for (int k = 0; k < 400 && run_pid < 0; ++k) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(25));
+    for (const auto& e : fs::directory_iterator("/proc")) {
+      std::ifstream stat(e.path() / "stat");
+      std::string pid, comm, state;
+      long ppid = 0;
+      if (stat >> pid >> comm >> state >> ppid && ppid == campaign) run_pid = std::stoi(pid);
+    }
+  }
+  ASSERT_GT(run_pid, 0) << "the campaign started no run";
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  kill(run_pid, SIGTERM);
+  ASSERT_EQ(wait_for(campaign, 60), 0) << read_file(dir / "err.log");
+  EXPECT_EQ(scalar(db, "SELECT status || ' ' || attempts FROM runs"), "ok 2");
 }

@@ -115,3 +115,35 @@ TEST(CampaignStore, ParameterNamedLikeABuiltInColumnIsRefused) {
   EXPECT_THROW(db.create_campaign(c, {{"status", false}}, {}), flume::InputError);
   EXPECT_TRUE(db.campaigns().empty());  // the failed transaction left nothing behind
 }
+
+// Issue 29: the writer lock belongs to the database file: a second writer through the same path, a symlink or
+// a hard link is refused naming the path it was given (this process's pid as the holder), a reader is not,
+// and the lock goes with the first store.
+TEST(CampaignStore, SecondWriterThroughAnyPathIsRefusedAndReadersAreNot) {
+  const std::string file = fresh_db("locked");
+  const std::string sym = file + ".symlink", hard = file + ".hardlink";
+  std::filesystem::remove(sym);
+  std::filesystem::remove(hard);
+  {
+    CampaignStore writer(file);
+    make_campaign(writer, 3);
+    std::filesystem::create_symlink(file, sym);
+    std::filesystem::create_hard_link(file, hard);
+    for (const std::string& path : {file, sym, hard}) {
+      try {
+        CampaignStore second(path);
+        ADD_FAILURE() << path << ": a second writer was let in";
+      } catch (const flume::InputError& e) {
+        EXPECT_EQ(e.file(), path);
+        EXPECT_NE(e.problem().find("another flume job (pid " + std::to_string(getpid()) + ")"), std::string::npos)
+            << e.what();
+      }
+      // A reader through a hard link would look for "<link>-wal", not the writer's log: not tried here.
+      if (path == hard) continue;
+      CampaignStore reader(path, /*read_only=*/true);
+      EXPECT_EQ(reader.campaigns().size(), 1u);
+    }
+  }
+  CampaignStore again(hard);  // the first writer closed: the lock is free
+  EXPECT_EQ(again.campaigns().size(), 1u);
+}

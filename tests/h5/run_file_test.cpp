@@ -249,3 +249,31 @@ TEST_F(RunFileTest, H5lsReadsTheFileWhenInstalled) {
 }
 
 }  // namespace
+
+// Issue 29: a growing series is appended at each flush (only the new rows are written), and after flush() the
+// .part file's bytes are an HDF5 file with every row so far, as a SIGKILL then would leave them (read from a
+// copy: HDF5 will not open a second handle on a file this process has open for writing).
+TEST_F(RunFileTest, AppendedSeriesGrowAtEachFlushAndThePartFileReadsBetween) {
+  RunFile f(result());
+  std::vector<double> t, v;  // v: 3 columns per row
+  for (int flush = 0; flush < 3; ++flush) {
+    for (int k = 0; k < 5 + flush; ++k) {
+      t.push_back(0.1 * static_cast<double>(t.size()));
+      for (int c = 0; c < 3; ++c) v.push_back(10.0 * static_cast<double>(t.size()) + c);
+    }
+    f.append_series("/gauges/g", "time", t);
+    f.append_matrix("/probes/p", "velocity", v, 3);
+    f.flush();
+    const fs::path copy = dir_ / ("flushed-" + std::to_string(flush) + ".h5");
+    fs::copy_file(f.part_path(), copy);
+    Reader r(copy.string());
+    EXPECT_EQ(r.read_vector("/gauges/g/time"), t);
+    EXPECT_EQ(r.read_vector("/probes/p/velocity"), v);
+    EXPECT_EQ(r.shape("/probes/p/velocity"), (std::vector<std::size_t>{t.size(), 3}));
+  }
+  f.append_series("/gauges/g", "time", t);  // nothing new: nothing written
+  EXPECT_THROW(f.append_series("/gauges/g", "time", {0.0}), std::logic_error);     // shrank
+  EXPECT_THROW(f.append_matrix("/probes/p", "velocity", v, 2), std::logic_error);  // other columns
+  f.finalize();
+  EXPECT_EQ(flume::h5::read_vector(result(), "/gauges/g/time"), t);
+}
