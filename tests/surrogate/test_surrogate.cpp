@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "tests/common/run_command.h"
+#include "tests/surrogate/test_dir.h"
 #include "tests/report/campaign_fixture.h"
 #include "common/errors.h"
 #include "report/report.h"
@@ -21,14 +22,7 @@ namespace fs = std::filesystem;
 using json = nlohmann::json;
 using namespace flume::surrogate;
 
-fs::path test_dir() {
-  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  const fs::path dir = fs::temp_directory_path() /
-                       ("flume_surrogate_" + std::to_string(getpid()) + "_" + info->test_suite_name() + "_" + info->name());
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
+fs::path test_dir() { return flume::test::surrogate_test_dir(); }
 
 const double kA = 7.0, kB = 0.1;
 

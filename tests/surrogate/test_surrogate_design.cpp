@@ -15,6 +15,7 @@
 #include "surrogate/posterior.h"
 #include "surrogate/stored.h"
 #include "tests/common/run_command.h"
+#include "tests/surrogate/test_dir.h"
 #include "tests/report/campaign_fixture.h"
 
 namespace {
@@ -23,14 +24,7 @@ namespace fs = std::filesystem;
 using json = nlohmann::json;
 using namespace flume::surrogate;
 
-fs::path test_dir() {
-  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  const fs::path dir = fs::temp_directory_path() /
-                       ("flume_surrogate_" + std::to_string(getpid()) + "_" + info->test_suite_name() + "_" + info->name());
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
+fs::path test_dir() { return flume::test::surrogate_test_dir(); }
 
 flume::sampling::Distribution uniform(double lo, double hi) {
   flume::sampling::Distribution d;
