@@ -289,6 +289,15 @@ TEST(Cli, FitSobolPredictAndBadInput) {
   EXPECT_NE(r.err.find("--holdout"), std::string::npos) << r.err;
   r = flume_cmd({"surrogate", "sobol", "--db", db, "--campaign", "ishigami", "--metric", "y", "--kind", "x"}, dir);
   EXPECT_EQ(r.rc, 2);
+  r = flume_cmd({"surrogate", "posterior", "--db", db, "--calibration", "ishigami", "--noise-m", "0.002"}, dir);
+  EXPECT_EQ(r.rc, 2);
+  EXPECT_EQ(r.err.rfind(db + ": --calibration: 'ishigami' is a campaign, not a calibration", 0), 0u) << r.err;
+  r = flume_cmd({"surrogate", "multilevel", "--db", db, "--low", "ishigami", "--metric", "y"}, dir);
+  EXPECT_EQ(r.rc, 2);
+  EXPECT_NE(r.err.find("--high"), std::string::npos) << r.err;
+  r = flume_cmd({"surrogate", "fit", "--db", db, "--campaign", "ishigami", "--metric", "y", "--folds", "-1"}, dir);
+  EXPECT_EQ(r.rc, 2);
+  EXPECT_EQ(r.err.rfind("command line: --folds: must be a number in [0, 100000] (got '-1')", 0), 0u) << r.err;
 }
 
 }  // namespace
