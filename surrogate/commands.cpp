@@ -14,6 +14,7 @@
 #include "common/errors.h"
 #include "surrogate/adaptive_campaign.h"
 #include "surrogate/multilevel.h"
+#include "surrogate/ot_models.h"
 #include "surrogate/posterior.h"
 #include "surrogate/stored.h"
 
@@ -316,6 +317,7 @@ int show(const Args& a) {
 
 int surrogate_main(int argc, char** argv) {
   return guarded_main("flume surrogate", kUsage, [&] {
+    surrogate::detail::quiet_warnings();
     const Args a = parse_args(argc, argv);
     if (a.verb == "fit") return fit(a);
     if (a.verb == "predict") return predict(a);

@@ -97,7 +97,7 @@ std::vector<OT::FunctionalChaosResult> chaos_replicates(const OT::FunctionalChao
     OT::Sample alpha(k, 1);
     for (std::size_t c = 0; c < k; ++c) alpha(c, 0) = coef[c];
     out.emplace_back(xb, yb, fitted.getDistribution(), fitted.getTransformation(), fitted.getInverseTransformation(),
-                     fitted.getComposedModel(), fitted.getOrthogonalBasis(), fitted.getIndices(), alpha, psi,
+                     OT::Function(), fitted.getOrthogonalBasis(), fitted.getIndices(), alpha, psi,
                      fitted.getResiduals(), fitted.getRelativeErrors());
   }
   return out;
@@ -166,6 +166,8 @@ void load_study(const std::string& xml, OT::PersistentObject& object) {
   study.load();
   study.fillObject("surrogate", object);
 }
+
+void quiet_warnings() { OT::Log::Show(OT::Log::ERROR); }
 
 void rethrow(const OT::Exception& e) {
   std::string what = e.what();

@@ -38,6 +38,9 @@ OT::KrigingResult refit_kriging(const OT::KrigingResult& fitted, const OT::Sampl
 std::string save_study(const OT::PersistentObject& object);
 void load_study(const std::string& xml, OT::PersistentObject& object);
 
+// OpenTURNS' warnings off (a command's output is its own lines; the fits' numerical notes are not for users).
+void quiet_warnings();
+
 // OpenTURNS' errors on one line.
 [[noreturn]] void rethrow(const OT::Exception& e);
 

@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "tests/common/run_command.h"
+#include "tests/surrogate/test_dir.h"
 #include "tests/report/campaign_fixture.h"
 #include "common/errors.h"
 #include "report/report.h"
@@ -21,14 +22,7 @@ namespace fs = std::filesystem;
 using json = nlohmann::json;
 using namespace flume::surrogate;
 
-fs::path test_dir() {
-  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  const fs::path dir = fs::temp_directory_path() /
-                       ("flume_surrogate_" + std::to_string(getpid()) + "_" + info->test_suite_name() + "_" + info->name());
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
+fs::path test_dir() { return flume::test::surrogate_test_dir(); }
 
 const double kA = 7.0, kB = 0.1;
 
@@ -67,9 +61,14 @@ TEST(Chaos, IshigamiSobolIndicesAndQ2From200Runs) {
   const double v1 = 0.5 * std::pow(1 + kB * pi4 / 5, 2), v2 = kA * kA / 8, v13 = 8 * kB * kB * pi8 / 225;
   const double v = v1 + v2 + v13;
   const double first[3] = {v1 / v, v2 / v, 0.0}, total[3] = {(v1 + v13) / v, v2 / v, v13 / v};
+  std::printf("Ishigami, 200 runs: Q2 %zu-fold %.5f, degree %d, %d terms\n", q["folds"].get<std::size_t>(),
+              q["q2_cv"].get<double>(), q["degree"].get<int>(), q["terms"].get<int>());
   for (int j = 0; j < 3; ++j) {
     const json& f = q["sobol"]["first"][j];
     const json& t = q["sobol"]["total"][j];
+    std::printf("x%d: S %.4f [%.4f, %.4f] exact %.4f, ST %.4f [%.4f, %.4f] exact %.4f\n", j + 1,
+                f["value"].get<double>(), f["lo"].get<double>(), f["hi"].get<double>(), first[j],
+                t["value"].get<double>(), t["lo"].get<double>(), t["hi"].get<double>(), total[j]);
     EXPECT_NEAR(f["value"].get<double>(), first[j], 0.02) << "first-order index of x" << j + 1;
     EXPECT_NEAR(t["value"].get<double>(), total[j], 0.02) << "total index of x" << j + 1;
     // The bootstrap interval brackets its own estimate.
@@ -157,6 +156,8 @@ TEST(Chaos, ExceedanceProbabilityOfAKnownModel) {
     const double exact = std::erfc(std::sqrt(t / 2)) + std::sqrt(2 * t / M_PI) * std::exp(-t / 2);
     const double p = c["p"][i].get<double>();
     const double sd = std::sqrt(exact * (1 - exact) / q["exceedance"]["mc_size"].get<double>());
+    std::printf("chi2(3): P(Y > %.4f) = %.4f [%.4f, %.4f], exact %.4f\n", t, p, c["lo"][i].get<double>(),
+                c["hi"][i].get<double>(), exact);
     EXPECT_NEAR(p, exact, 4 * sd) << "t = " << t;
     EXPECT_LE(c["lo"][i].get<double>(), exact) << "t = " << t;
     EXPECT_GE(c["hi"][i].get<double>(), exact) << "t = " << t;
@@ -288,6 +289,15 @@ TEST(Cli, FitSobolPredictAndBadInput) {
   EXPECT_NE(r.err.find("--holdout"), std::string::npos) << r.err;
   r = flume_cmd({"surrogate", "sobol", "--db", db, "--campaign", "ishigami", "--metric", "y", "--kind", "x"}, dir);
   EXPECT_EQ(r.rc, 2);
+  r = flume_cmd({"surrogate", "posterior", "--db", db, "--calibration", "ishigami", "--noise-m", "0.002"}, dir);
+  EXPECT_EQ(r.rc, 2);
+  EXPECT_EQ(r.err.rfind(db + ": --calibration: 'ishigami' is a campaign, not a calibration", 0), 0u) << r.err;
+  r = flume_cmd({"surrogate", "multilevel", "--db", db, "--low", "ishigami", "--metric", "y"}, dir);
+  EXPECT_EQ(r.rc, 2);
+  EXPECT_NE(r.err.find("--high"), std::string::npos) << r.err;
+  r = flume_cmd({"surrogate", "fit", "--db", db, "--campaign", "ishigami", "--metric", "y", "--folds", "-1"}, dir);
+  EXPECT_EQ(r.rc, 2);
+  EXPECT_EQ(r.err.rfind("command line: --folds: must be a number in [0, 100000] (got '-1')", 0), 0u) << r.err;
 }
 
 }  // namespace

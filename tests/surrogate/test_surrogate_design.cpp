@@ -15,6 +15,7 @@
 #include "surrogate/posterior.h"
 #include "surrogate/stored.h"
 #include "tests/common/run_command.h"
+#include "tests/surrogate/test_dir.h"
 #include "tests/report/campaign_fixture.h"
 
 namespace {
@@ -23,14 +24,7 @@ namespace fs = std::filesystem;
 using json = nlohmann::json;
 using namespace flume::surrogate;
 
-fs::path test_dir() {
-  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  const fs::path dir = fs::temp_directory_path() /
-                       ("flume_surrogate_" + std::to_string(getpid()) + "_" + info->test_suite_name() + "_" + info->name());
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
+fs::path test_dir() { return flume::test::surrogate_test_dir(); }
 
 flume::sampling::Distribution uniform(double lo, double hi) {
   flume::sampling::Distribution d;
@@ -166,6 +160,8 @@ TEST(Multilevel, PairsTwoCampaignsOfAStore) {
   ASSERT_EQ(s.pair_low.size(), 40u);
   EXPECT_EQ(s.low_only.size(), 360u);
   const auto e = two_level_estimate(s, 0.999);
+  std::printf("Forrester two-level: %.4f [%.4f, %.4f] exact %.4f; cost %.0f; high alone for the same variance %.0f\n",
+              e.mean, e.lo, e.hi, exact_mean_high(), e.cost_s, e.high_only_cost_s);
   EXPECT_LE(e.lo, exact_mean_high());
   EXPECT_GE(e.hi, exact_mean_high());
   EXPECT_DOUBLE_EQ(e.cost_s, 360 * 1.0 + 40 * 11.0);
@@ -219,6 +215,8 @@ TEST(Posterior, LinearGaussianModelHasItsAnalyticPosterior) {
   const double sd[2] = {sd_a, sd_b}, mean[2] = {a_hat, b_hat};
   for (int j = 0; j < 2; ++j) {
     const auto& q = p.parameters[j];
+    std::printf("%s: posterior mean %.4f, 95 %% [%.4f, %.4f]; analytic %.4f +- %.4f; acceptance %.2f, misfit Q2 %.4f\n",
+                q.name.c_str(), q.mean, q.lo, q.hi, mean[j], 1.959964 * sd[j], p.acceptance, p.q2);
     // MCMC error: 20000 correlated samples are worth a few hundred independent ones (0.1 sd).
     EXPECT_NEAR(q.mean, mean[j], 0.25 * sd[j]) << q.name;
     EXPECT_NEAR((q.hi - q.lo) / (2 * 1.959964 * sd[j]), 1.0, 0.15) << q.name;
