@@ -110,9 +110,10 @@ RunOutcome run_scene(const Scene& scene, const SimulationOptions& options, const
   namespace fs = std::filesystem;
   const bool checkpointing = checkpoints.every_s > 0 || checkpoints.resume;
   if (checkpointing && scene.instruments.snapshot_rate_hz > 0)
-    throw InputError(scene.file, "instruments.snapshot_rate_hz",
-                     "a checkpointed or resumed run cannot keep snapshots yet (those before the checkpoint would "
-                     "be lost): set it to 0 or run without --checkpoint-every/--resume");
+    throw InputError(
+        scene.file, "instruments.snapshot_rate_hz",
+        "a checkpointed or resumed run cannot keep snapshots yet (those before the checkpoint would "
+        "be lost): set it to 0 or run without --checkpoint-every/--resume");
   std::error_code ec;
   fs::create_directories(out_dir, ec);
   if (ec) throw InputError(out_dir, "--out", "cannot create the output directory: " + ec.message());
