@@ -52,14 +52,14 @@ FLUME_HD int stencil_base(T x_grid, T& f) {
 // change (~1e-8) would be lost entirely. Every function below takes e and stays accurate as e -> 0.
 
 // The exponent gamma is an integer for water in practice (7, Monaghan's value and the scenes' default) or a
-// short binary fraction (7.125 = 57/8, the value ClaymoreUW's Waseda twin uses and the Waseda scenes copy), and
-// then J^gamma needs no transcendental function. With gamma = m / 2^k (k <= 3): x = J^(1/2^k) - 1 by k halvings
-// x <- x / (1 + sqrt(1 + x)), then (1 + x)^m by binary powering, carrying P_a = (1 + x)^a - 1 and
-// R_a = P_a - a x with P_{a+b} = P_a + P_b + P_a P_b and R_{a+b} = R_a + R_b + P_a P_b: no step forms a quantity
-// of size 1 next to a small one, so P = J^gamma - 1 and R = J^gamma - 1 - gamma e keep the relative precision of
-// e (and it is cheap: docs/solver.md, "Measurements behind the constants"). R needs x - e/2^k, which each halving
-// gives exactly as well: x_j - x_{j-1}/2 = -x_j^2/2.
-// Other exponents (not m / 2^k with k <= 3, or m above the limit) use expm1/log1p.
+// short binary fraction (7.125 = 57/8, the value ClaymoreUW's Waseda twin uses and the Waseda scenes copy),
+// and then J^gamma needs no transcendental function. With gamma = m / 2^k (k <= 3): x = J^(1/2^k) - 1 by k
+// halvings x <- x / (1 + sqrt(1 + x)), then (1 + x)^m by binary powering, carrying P_a = (1 + x)^a - 1 and
+// R_a = P_a - a x with P_{a+b} = P_a + P_b + P_a P_b and R_{a+b} = R_a + R_b + P_a P_b: no step forms a
+// quantity of size 1 next to a small one, so P = J^gamma - 1 and R = J^gamma - 1 - gamma e keep the relative
+// precision of e (and it is cheap: docs/solver.md, "Measurements behind the constants"). R needs x - e/2^k,
+// which each halving gives exactly as well: x_j - x_{j-1}/2 = -x_j^2/2. Other exponents (not m / 2^k with k
+// <= 3, or m above the limit) use expm1/log1p.
 constexpr int kTaitMaxHalvings = 3;
 constexpr int kTaitMaxNumerator = 255;
 // m with gamma = m / 2^halvings exactly (the smallest such halvings), or 0 when gamma takes the libm path.
@@ -248,17 +248,17 @@ FLUME_HD T jbar_update(T e_particle, T e_grid_average, T de, T psi) {
   return a + de + a * de;
 }
 
-// Unilateral volume constraint. J (integrated from the grid's velocity divergence, and smoothed by J-bar) does
-// not see particles that crowd together without the grid registering it (in a still 3D tank the level fell by
-// a third: docs/solver.md, "Measurements behind the constants"). The particles' own volumes say it: scattered to the grid, V_p = V0 J_p per cell
-// volume is the node's fill, 1 where particles tile space as their J says, below 1 at a free surface or a
-// wall. Where the fill (averaged back to the particle over free nodes) exceeds 1 + tol, the particle's J is
-// lowered in proportion, at `rate` per step: the pressure rises and spreads the crowd. Over-fill only, as the
-// density constraint of position-based fluids is one-sided, so free surfaces and splashes are untouched;
-// `tol` keeps the sampling noise of an irregular particle set out of it (0.03, the smallest that keeps a still
-// tank still: docs/solver.md; test_hydrostatic StillTank), at the price of letting the water crowd up to 3%
-// before the constraint acts. The rate relaxes the excess over ten
-// acoustic crossings of a cell (rate = 0.1 c dt / dx per step, 0.04 at CFL 0.4): fast against the drift
+// Unilateral volume constraint. J (integrated from the grid's velocity divergence, and smoothed by J-bar)
+// does not see particles that crowd together without the grid registering it (in a still 3D tank the level
+// fell by a third: docs/solver.md, "Measurements behind the constants"). The particles' own volumes say it:
+// scattered to the grid, V_p = V0 J_p per cell volume is the node's fill, 1 where particles tile space as
+// their J says, below 1 at a free surface or a wall. Where the fill (averaged back to the particle over free
+// nodes) exceeds 1 + tol, the particle's J is lowered in proportion, at `rate` per step: the pressure rises
+// and spreads the crowd. Over-fill only, as the density constraint of position-based fluids is one-sided, so
+// free surfaces and splashes are untouched; `tol` keeps the sampling noise of an irregular particle set out
+// of it (0.03, the smallest that keeps a still tank still: docs/solver.md; test_hydrostatic StillTank), at
+// the price of letting the water crowd up to 3% before the constraint acts. The rate relaxes the excess over
+// ten acoustic crossings of a cell (rate = 0.1 c dt / dx per step, 0.04 at CFL 0.4): fast against the drift
 // (seconds), slow against the step, so it adds no acoustic noise.
 constexpr double kFillTolerance = 0.03;
 inline double fill_rate(double dt, double sound_speed, double dx) {
@@ -393,22 +393,22 @@ FLUME_HD void ghost_domain(const double* x, const double* lo, const double* hi, 
 // axes (those not in `axes`) both take their mass-weighted mean velocity, a perfectly inelastic collision.
 // Written as the velocity changes dvg and dvm, computed from the velocities before any exchange, so that a
 // mirror shared by two ghosts (next to a corner) sums both and the nodes can be processed in any order.
-// Momentum is conserved (mg dvg + mm dvm = 0 per pair: the exchange is internal to the water, a free-slip wall
-// exerts no tangential force) and kinetic energy can only fall. Overwriting the ghost's velocity with the
-// mirror's instead is not conservative (docs/solver.md, "Measurements behind the constants").
+// Momentum is conserved (mg dvg + mm dvm = 0 per pair: the exchange is internal to the water, a free-slip
+// wall exerts no tangential force) and kinetic energy can only fall. Overwriting the ghost's velocity with
+// the mirror's instead is not conservative (docs/solver.md, "Measurements behind the constants").
 //
 // Along the normal axes the ghost is the mirror node's image: the mirror takes the ghost's mass and its
 // normal momentum reflected, mg (-vg_pre), vg_pre being the velocity the particles alone gave the ghost (the
-// push of the water's pressure into the wall), before gravity and the wall condition. Gravity is left out: the
-// image of the ghost's weight would lift the first node above a floor. Without it, the first fluid node off a wall
-// feels the pressure of the particles on its fluid side only (its stencil reaches into the wall, where there
-// are none) and is pushed towards the wall by 1/8 of p per cell face: the water crowds along every wall until
-// its compression balances that (a still tank's surface rose along its walls: docs/solver.md). The image's push is what the missing particles would have given;
-// the wall takes it (it is counted in the wall's load). The push only ever slows a mirror node that moves
-// towards the wall, down to rest at most: it is a contact force and does no positive work (unbounded, it pumped
-// energy into a soft tank). It acts on
-// the axes in `push_axes` (image_push_axes: walls with a normal across gravity); elsewhere a normal axis keeps
-// its velocity.
+// push of the water's pressure into the wall), before gravity and the wall condition. Gravity is left out:
+// the image of the ghost's weight would lift the first node above a floor. Without it, the first fluid node
+// off a wall feels the pressure of the particles on its fluid side only (its stencil reaches into the wall,
+// where there are none) and is pushed towards the wall by 1/8 of p per cell face: the water crowds along
+// every wall until its compression balances that (a still tank's surface rose along its walls:
+// docs/solver.md). The image's push is what the missing particles would have given; the wall takes it (it is
+// counted in the wall's load). The push only ever slows a mirror node that moves towards the wall, down to
+// rest at most: it is a contact force and does no positive work (unbounded, it pumped energy into a soft
+// tank). It acts on the axes in `push_axes` (image_push_axes: walls with a normal across gravity); elsewhere
+// a normal axis keeps its velocity.
 template <int D, typename T>
 FLUME_HD void ghost_exchange(const T* vg, const T* vg_pre, T mg, const T* vm, T mm, unsigned axes, unsigned push_axes,
                              T* dvg, T* dvm) {
@@ -432,10 +432,10 @@ FLUME_HD void ghost_exchange(const T* vg, const T* vg_pre, T mg, const T* vm, T 
 }
 
 // The axes along which walls push with their ghosts' image: those gravity has no component along (side walls,
-// the gate and quay faces; a symmetry plane is no wall, SymmetryPlane), not floors. The image is the mirror image of the pressure, right
-// where the pressure is locally even about the wall; a floor carries the hydrostatic gradient across it, and
-// there the push did harm (it slowed the bore over the Waseda apron: docs/solver.md, "Measurements behind the
-// constants").
+// the gate and quay faces; a symmetry plane is no wall, SymmetryPlane), not floors. The image is the mirror
+// image of the pressure, right where the pressure is locally even about the wall; a floor carries the
+// hydrostatic gradient across it, and there the push did harm (it slowed the bore over the Waseda apron:
+// docs/solver.md, "Measurements behind the constants").
 template <int D>
 FLUME_HD unsigned image_push_axes(const double* gravity) {
   double g2 = 0;
@@ -530,13 +530,13 @@ FLUME_HD T half_space_distance(const T* x, const T* point, const T* n, T* normal
 }
 
 // Which analytic wall holds grid node x, and through which face normals: a node on or in the wall (within
-// 1e-6 dx) is held, any other is free. Decided in double: walls usually sit on grid lines, and in float the node on
-// the wall would fall on either side of it by round-off (docs/solver.md).
+// 1e-6 dx) is held, any other is free. Decided in double: walls usually sit on grid lines, and in float the
+// node on the wall would fall on either side of it by round-off (docs/solver.md).
 //
-// A node inside a box is held by every face within two cells of it, not only by the nearest: near the quay's top
-// edge the nearest face is the top, and a node constrained by it alone would let the basin's water flow sideways
-// into the wall. Inside a thin wall, such as the gate panel, both faces hold it. Returns the number of normals
-// written to n (0: the node is free).
+// A node inside a box is held by every face within two cells of it, not only by the nearest: near the quay's
+// top edge the nearest face is the top, and a node constrained by it alone would let the basin's water flow
+// sideways into the wall. Inside a thin wall, such as the gate panel, both faces hold it. Returns the number
+// of normals written to n (0: the node is free).
 //
 // So a wall face between two grid lines acts from the next node inside it (a `subcell` boundary resolves it:
 // subcell_cover below; docs/calibration.md).
@@ -575,18 +575,18 @@ FLUME_HD void apply_wall(T* v, const double (*n)[D], int faces, const T* vb, Bc 
   }
 }
 
-// A box's faces between grid lines, resolved below a cell (a `subcell` boundary: the basin's gate panel, whose
-// opening is a calibrated parameter). wall_faces holds the nodes on or inside a box, so a face between two grid
-// lines acts from the next node inside it, and WG1's peak was a staircase of the gate's height. Here a node outside
-// the box by s < dx across a resolved face is partly covered, cover = prod_a (1 - s_a / dx): 1 on the face (held,
-// as wall_faces holds it), 0 one cell out (free), so that as the face moves by a cell the held row hands over to
-// the next one without a jump. A partly covered node is drawn towards the velocity the box would give it
-// (v_held, through the faces of its nearest point on the box) at the rate lambda = rate0 cover / (1 - cover),
-// integrated implicitly over the step: u <- u / (1 + lambda dt), u = v - v_held. rate0 = kSubcellRate c / dx, a
-// quarter of the sound speed over a cell. The form and the constant are a sub-cell model, chosen so that the flow
-// through a partly covered row falls linearly with its cover, and WG1's peak grows steadily with the gate's
-// height across a cell (tests/waseda, Waseda.GateHeightActsBelowACell; the alternatives tried and their figures
-// in docs/solver.md, "Measurements behind the constants").
+// A box's faces between grid lines, resolved below a cell (a `subcell` boundary: the basin's gate panel,
+// whose opening is a calibrated parameter). wall_faces holds the nodes on or inside a box, so a face between
+// two grid lines acts from the next node inside it, and WG1's peak was a staircase of the gate's height. Here
+// a node outside the box by s < dx across a resolved face is partly covered, cover = prod_a (1 - s_a / dx): 1
+// on the face (held, as wall_faces holds it), 0 one cell out (free), so that as the face moves by a cell the
+// held row hands over to the next one without a jump. A partly covered node is drawn towards the velocity the
+// box would give it (v_held, through the faces of its nearest point on the box) at the rate lambda = rate0
+// cover / (1 - cover), integrated implicitly over the step: u <- u / (1 + lambda dt), u = v - v_held. rate0 =
+// kSubcellRate c / dx, a quarter of the sound speed over a cell. The form and the constant are a sub-cell
+// model, chosen so that the flow through a partly covered row falls linearly with its cover, and WG1's peak
+// grows steadily with the gate's height across a cell (tests/waseda, Waseda.GateHeightActsBelowACell; the
+// alternatives tried and their figures in docs/solver.md, "Measurements behind the constants").
 constexpr double kSubcellRate = 0.25;
 FLUME_HD double subcell_rate0(double sound_speed, double dx) { return kSubcellRate * sound_speed / dx; }
 template <int D>

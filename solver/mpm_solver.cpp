@@ -11,13 +11,12 @@
 // re-sort is needed, which is what the tile's margin allows for.
 #include <omp.h>
 
+#include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
 #include <sstream>
-
-#include <Eigen/Core>
 
 #include "common/errors.h"
 #include "solver/block_sort.h"
@@ -210,7 +209,8 @@ class MpmSolver final : public Simulation {
     ar(vol_);
     ar(held_);
     ar(tag_);
-    ar.fields(time_, dt_, max_speed_, steps_, energy0_, energy_slack_, last_energy_, mass_, status_, message_);
+    ar.fields(time_, dt_, max_speed_, steps_, energy0_, energy_slack_, last_energy_, mass_, status_,
+              message_);
     // The block each particle was sorted into: between sorts a particle may drift into the next block's tile
     // margin without a re-sort, so its block is not a function of its position.
     ar.fields(needs_sort_, sort_key_);
@@ -489,7 +489,8 @@ class MpmSolver final : public Simulation {
       T* tile = &tiles_[static_cast<size_t>(p) * kLanes * kTileNodes];
       const TileBox box = tile_box(p, lo_grid, inv_dx);
       tile_box_[p] = box;
-      mpm::for_each_box_row<D>(box, [&](int a, int len) { std::fill_n(tile + a * kLanes, len * kLanes, T(0)); });
+      mpm::for_each_box_row<D>(box,
+                               [&](int a, int len) { std::fill_n(tile + a * kLanes, len * kLanes, T(0)); });
       int blk[D], origin[D];
       unpack_key<D>(pkeys_[p], blk);
       for (int d = 0; d < D; ++d) origin[d] = blk[d] * kBlock - 1;
@@ -522,8 +523,8 @@ class MpmSolver final : public Simulation {
           for (int k = 0; k < D * D; ++k) Cp[k] = C_[k][i];
           for (int a = 0; a < D; ++a) vp[a] = v_[a][i];
           const T V = vol_[i], m = rho * V;
-          mpm::p2g_particle<D>(bp[j], Cp, e_[i], V, m, vp, f, xp, dx, mu, stress_scale, slope_h, A, mom0, strain,
-                               volume);
+          mpm::p2g_particle<D>(bp[j], Cp, e_[i], V, m, vp, f, xp, dx, mu, stress_scale, slope_h, A, mom0,
+                               strain, volume);
           // What node (base + i) receives, before its weight: the channels at i = 0 plus i_b times slope[b].
           for (int a = 0; a < D; ++a) {
             bat0[1 + a][j] = mom0[a];
@@ -591,10 +592,9 @@ class MpmSolver final : public Simulation {
     double xn[D];
     for (int d = 0; d < D; ++d) xn[d] = grid_lo_[d] + node[d] * dx_;
     mpm::GhostSearch<D> found;
-    uint8_t on_wall = mpm::apply_boundaries<D>(xn, m, v, dt, load_weight, dx_, subcell_rate0_, walls_.data(),
-                                               g_bnd_.data() + g_bnd_start_[g],
-                                               static_cast<int>(g_bnd_start_[g + 1] - g_bnd_start_[g]),
-                                               container_, my_impulse, found);
+    uint8_t on_wall = mpm::apply_boundaries<D>(
+        xn, m, v, dt, load_weight, dx_, subcell_rate0_, walls_.data(), g_bnd_.data() + g_bnd_start_[g],
+        static_cast<int>(g_bnd_start_[g + 1] - g_bnd_start_[g]), container_, my_impulse, found);
     if (found.found()) {
       ghost.idx = idx;
       ghost.load_weight = load_weight;
@@ -753,8 +753,8 @@ class MpmSolver final : public Simulation {
     zone_.index(gkeys_);
     sym_acc_.resize(zone_.entries());
   }
-  // After the walls and the ghosts: every node beyond the plane is the reflection of its mirror; one whose mirror
-  // lies outside the zone (more than SymmetryZone::kZone cells beyond, no mass) is emptied.
+  // After the walls and the ghosts: every node beyond the plane is the reflection of its mirror; one whose
+  // mirror lies outside the zone (more than SymmetryZone::kZone cells beyond, no mass) is emptied.
   void mirror_beyond_symmetry() {
     const long nq = static_cast<long>(zone_.entries());
 #pragma omp parallel for schedule(static)
@@ -1093,10 +1093,10 @@ class MpmSolver final : public Simulation {
       }
     max_speed_ = std::sqrt(vmax2);
     needs_sort_ = resort;
-    // The volume constraint (mpm::fill_correction) does work on the water that the audit cannot otherwise see:
-    // it restores the elastic energy of water that crowded without compressing. What it adds is counted as
-    // supplied energy; what it removes (lowering J of water in tension) is dissipation and is not (crediting
-    // it hid an energy rise at a dam-break front: docs/solver.md).
+    // The volume constraint (mpm::fill_correction) does work on the water that the audit cannot otherwise
+    // see: it restores the elastic energy of water that crowded without compressing. What it adds is counted
+    // as supplied energy; what it removes (lowering J of water in tension) is dissipation and is not
+    // (crediting it hid an energy rise at a dam-break front: docs/solver.md).
     energy0_ += fill_work;
     const double t_new = time_ + double(dt);
     if (bad != std::numeric_limits<long>::max()) {
@@ -1175,7 +1175,7 @@ class MpmSolver final : public Simulation {
   std::vector<T> sort_scratch_;
   std::vector<Wall> walls_;
   mpm::Container<D, T> container_;  // the domain box
-  double subcell_rate0_ = 0;         // mpm::subcell_drag's rate
+  double subcell_rate0_ = 0;        // mpm::subcell_drag's rate
   std::vector<double> load_impulse_;
   std::unique_ptr<DebrisCoupling> debris_;
   std::unique_ptr<InflowBoundary<D, T>> inflow_;
@@ -1197,10 +1197,10 @@ class MpmSolver final : public Simulation {
   std::vector<double> push_out_;  // per particle block and box: impulse and moment of pushed-out particles
   std::vector<uint8_t> push_near_;  // per particle block: whether it is near a box (its push_out_ slots are set)
   // Nodes up to one cell outside a box are its moving-wall nodes: then a water particle touching the box puts
-  // (nearly) all its weight on them (quadratic B-splines reach 1.5 cells; nodes 1-1.5 cells away carry at most
-  // 1/8), so the box feels the water's full pressure. With only the nodes inside the box, the share is that
-  // of the face's position between nodes, 1/2 on average, and a floating box sat too deep (docs/solver.md;
-  // tests/solver/test_debris.cpp).
+  // (nearly) all its weight on them (quadratic B-splines reach 1.5 cells; nodes 1-1.5 cells away carry at
+  // most 1/8), so the box feels the water's full pressure. With only the nodes inside the box, the share is
+  // that of the face's position between nodes, 1/2 on average, and a floating box sat too deep
+  // (docs/solver.md; tests/solver/test_debris.cpp).
   static constexpr double coupling_band_ = 1.0;
   bool needs_sort_ = true;
   double time_ = 0, dt_ = 0, max_speed_ = 0;

@@ -1,5 +1,12 @@
 // The CUDA backend of the MLS-MPM solver: the same step as the CPU backend (solver/mpm_solver.cpp), with the
-// physics taken from the same inline functions (solver/mpm_kernels.h), on device arrays.
+// physics taken from the same inline functions (solver/mpm_kernels.h, solver/mpm/*_k.h: one particle's P2G
+// terms and G2P update, one node against the boundaries, block keys), launched by mpm::parallel_for
+// (solver/mpm/launch.h), on device arrays. This file holds the stencil loops with their atomics, the launches
+// and the memory.
+//
+// Inflow and checkpoints go through the host: the inflow boundary (solver/inflow.h) works on host arrays, so
+// the particles are copied down and back around it each step; a checkpoint copies the particles and their
+// sort keys. Debris are not coupled yet (make_simulation refuses them: docs/solver.md).
 //
 // Layout. Particles are structure-of-arrays device vectors, sorted by the grid block (kBlock^D nodes) that
 // holds their stencil's base node, exactly as on the CPU. The grid is block-sparse: after each sort the
@@ -144,7 +151,9 @@ struct View {
 
   // Grid index of node `node` (global node coordinates) by a binary search of the sorted grid blocks; -1 where
   // no block holds it.
-  FLUME_HD int64_t grid_index(const int* node) const { return mpm::node_index<D>(gkeys, nodes / kNodes, node); }
+  FLUME_HD int64_t grid_index(const int* node) const {
+    return mpm::node_index<D>(gkeys, nodes / kNodes, node);
+  }
 
   // Grid index of node `node` (global node coordinates) seen from particle block `pb`: the node lies in one
   // of the block's 3^D neighbours because a particle is re-sorted before its stencil leaves them.
@@ -210,8 +219,8 @@ struct P2G {
       vp[a] = s.v[a][i];
       xp[a] = s.x[a][i];
     }
-    mpm::p2g_particle<D>(s.law.pressure(s.e[i]), Cp, s.e[i], V, m, vp, f, xp, dx, s.mu, stress_scale, s.strain_slope,
-                         A, mom0, mJ, vol);
+    mpm::p2g_particle<D>(s.law.pressure(s.e[i]), Cp, s.e[i], V, m, vp, f, xp, dx, s.mu, stress_scale,
+                         s.strain_slope, A, mom0, mJ, vol);
     if (s.held) mom0[D - 1] += s.held[i] * lift * m;
     constexpr int kStencil = mpm::Pow<D>::of(3);
     for (int q = 0; q < kStencil; ++q) {
@@ -306,8 +315,8 @@ struct GridUpdate {
     // The particles' momentum alone, before gravity and the walls: what a ghost's image reflects (mpm::ghost_exchange).
     for (int d = 0; d < D; ++d) s.ghost_dv[d * s.nodes + idx] = s.grid[(1 + d) * s.nodes + idx] / m;
     mpm::GhostSearch<D> found;
-    const bool on_wall = mpm::apply_boundaries<D>(xn, m, v, dt, load_weight, s.dx_d, s.subcell_rate, s.walls, nullptr,
-                                                  s.n_walls, s.container, s.impulse, found);
+    const bool on_wall = mpm::apply_boundaries<D>(xn, m, v, dt, load_weight, s.dx_d, s.subcell_rate, s.walls,
+                                                  nullptr, s.n_walls, s.container, s.impulse, found);
     s.ghost_mirror[idx] = -1;
     if (found.found()) {
       int mirror[D];
@@ -368,7 +377,8 @@ struct GhostMirrorUpdate {
       mpm::accumulate(&s.grid[(1 + d) * s.nodes + mi], s.ghost_dv[d * s.nodes + idx]);
       // The normal part (the image's push) is the wall's load. The mirror's mass is read before any change.
       if (s.impulse && wall >= 0 && (s.ghost_axes[idx] & (1u << d)))
-        mpm::accumulate(&s.impulse[wall * D + d], -load_weight * double(s.grid[mi]) * double(s.ghost_dv[d * s.nodes + idx]));
+        mpm::accumulate(&s.impulse[wall * D + d],
+                        -load_weight * double(s.grid[mi]) * double(s.ghost_dv[d * s.nodes + idx]));
     }
   }
 };
@@ -652,10 +662,10 @@ class MpmCuda final : public Simulation {
     energy_slack_ = std::max(energy_slack_, 0.01 * energy().kinetic);
   }
 
-  // As MpmSolver::checkpoint: everything a step reads that an earlier step wrote, the particles through the host,
-  // and the block each particle was last sorted into (between sorts a particle may drift into the next block's
-  // tile margin without a re-sort, and the sum order of P2G follows the particle order): the block lists and the
-  // grid are rebuilt from those, so a resumed run repeats the uninterrupted one step for step.
+  // As MpmSolver::checkpoint: everything a step reads that an earlier step wrote, the particles through the
+  // host, and the block each particle was last sorted into (between sorts a particle may drift into the next
+  // block's tile margin without a re-sort, and the sum order of P2G follows the particle order): the block
+  // lists and the grid are rebuilt from those, so a resumed run repeats the uninterrupted one step for step.
   void checkpoint(StateArchive& ar) override {
     ar.section(std::string("mpm cuda ") + std::to_string(D) + "D " + (sizeof(T) == 4 ? "float" : "double"));
     for (int d = 0; d < D; ++d) {
@@ -668,7 +678,8 @@ class MpmCuda final : public Simulation {
     archive(ar, held_);
     archive(ar, tag_);
     archive(ar, keys_);
-    ar.fields(time_, dt_, max_speed_, steps_, energy0_, energy_slack_, last_energy_, mass_, status_, message_);
+    ar.fields(time_, dt_, max_speed_, steps_, energy0_, energy_slack_, last_energy_, mass_, status_,
+              message_);
     ar(needs_sort_);
     instruments_.checkpoint(ar);
     ar.expect("inflow", inflow_ ? 1 : 0);
@@ -845,8 +856,8 @@ class MpmCuda final : public Simulation {
     build_blocks();
   }
 
-  // The particle blocks, each particle's block index, the grid blocks and the neighbour tables, from the particles'
-  // block keys (keys_, in particle order) as the last sort assigned them.
+  // The particle blocks, each particle's block index, the grid blocks and the neighbour tables, from the
+  // particles' block keys (keys_, in particle order) as the last sort assigned them.
   void build_blocks() {
     // Particle blocks, and each particle's block index.
     pkeys_.resize(n_);
@@ -915,8 +926,8 @@ class MpmCuda final : public Simulation {
     host_fresh_ = host_vol_fresh_ = false;
   }
 
-  // The inflow works on host arrays (solver/inflow.h): the particles go to the host and back around it each step,
-  // O(n) copies that a device-side buffer would save.
+  // The inflow works on host arrays (solver/inflow.h): the particles go to the host and back around it each
+  // step, O(n) copies that a device-side buffer would save.
   ParticleArrays<D, T> host_arrays() {
     ParticleArrays<D, T> a;
     for (int d = 0; d < D; ++d) {
@@ -958,8 +969,8 @@ class MpmCuda final : public Simulation {
     n_ = h_.x[0].size();
     resize_work();
   }
-  // As MpmSolver::apply_inflow: the inflow moves, adds and removes particles after the step; the energy audit is
-  // told what it did.
+  // As MpmSolver::apply_inflow: the inflow moves, adds and removes particles after the step; the energy audit
+  // is told what it did.
   void apply_inflow(double t0, double t1) {
     to_host();
     const auto change = inflow_->apply(t0, t1);

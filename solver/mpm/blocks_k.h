@@ -1,5 +1,6 @@
-// Block keys of the sparse grid, for both backends: particles are sorted by the key of the grid block (kBlock^D
-// nodes) holding their stencil's base node, and the active grid blocks are the 3^D neighbourhoods of those.
+// Block keys of the sparse grid, for both backends: particles are sorted by the key of the grid block
+// (kBlock^D nodes) holding their stencil's base node, and the active grid blocks are the 3^D neighbourhoods
+// of those.
 #pragma once
 #include <cmath>
 #include <cstdint>
@@ -9,7 +10,8 @@
 namespace flume::mpm {
 
 // 21 bits per axis, the last axis least significant: blocks sort along the last axis first, so that a block's
-// neighbours along it are adjacent in memory. Block indices are non-negative: the grid is padded below the domain.
+// neighbours along it are adjacent in memory. Block indices are non-negative: the grid is padded below the
+// domain.
 template <int D>
 FLUME_HD uint64_t pack_key(const int* b) {
   uint64_t k = 0;
@@ -33,7 +35,8 @@ FLUME_HD void neighbour_block(const int* b, int o, int* nb) {
   }
 }
 
-// The key of the block holding the stencil's base node of a particle at x (x_grid = (x - grid_lo) / dx per axis).
+// The key of the block holding the stencil's base node of a particle at x (x_grid = (x - grid_lo) / dx per
+// axis).
 template <int D, typename T>
 FLUME_HD uint64_t particle_block_key(const T* x_grid) {
   int b[D];
@@ -44,8 +47,8 @@ FLUME_HD uint64_t particle_block_key(const T* x_grid) {
   return pack_key<D>(b);
 }
 
-// Storage index (block * kBlock^D + local node) of a node (global node coordinates) in a grid of `nblocks` blocks
-// with sorted keys, found by binary search; -1 where no block holds it.
+// Storage index (block * kBlock^D + local node) of a node (global node coordinates) in a grid of `nblocks`
+// blocks with sorted keys, found by binary search; -1 where no block holds it.
 template <int D>
 FLUME_HD int64_t node_index(const uint64_t* keys, size_t nblocks, const int* node) {
   int blk[D], local = 0;

@@ -1,5 +1,5 @@
-// The scene's boundaries as the node update reads them (mpm::Wall, mpm::Container, mpm::SymmetryPlane), set up once
-// per run for both backends. Host code.
+// The scene's boundaries as the node update reads them (mpm::Wall, mpm::Container, mpm::SymmetryPlane), set
+// up once per run for both backends. Host code.
 #pragma once
 #include <vector>
 
@@ -9,8 +9,8 @@
 
 namespace flume::mpm {
 
-// The scene's boundaries in scene order (the node update applies them in that order); a `symmetry` one stays in
-// the list, where the node update skips it, so that a wall's index is its load cell's.
+// The scene's boundaries in scene order (the node update applies them in that order); a `symmetry` one stays
+// in the list, where the node update skips it, so that a wall's index is its load cell's.
 template <int D, typename T>
 std::vector<Wall<D, T>> scene_walls(const Scene& scene) {
   std::vector<Wall<D, T>> walls;

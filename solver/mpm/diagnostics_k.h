@@ -6,8 +6,8 @@
 namespace flume::mpm {
 
 // Adds particle p's linear and angular momentum (about the origin, 3 components each) to P and L: x_p x m v_p
-// plus the APIC spin m dx^2/4 eps_abc C_cb, the angular momentum the stencil's spread of mass gives the grid in
-// P2G (Jiang et al. 2015, section 5.3; derivation and sign in docs/solver.md). C is row-major, C[a*D+b] =
+// plus the APIC spin m dx^2/4 eps_abc C_cb, the angular momentum the stencil's spread of mass gives the grid
+// in P2G (Jiang et al. 2015, section 5.3; derivation and sign in docs/solver.md). C is row-major, C[a*D+b] =
 // dv_a/dx_b; for a rigid rotation C = [omega]x and the spin is m dx^2/2 omega, turning with the body.
 template <int D>
 FLUME_HD void add_particle_momentum(double m, double dx, const double* x, const double* v, const double* C,
@@ -28,8 +28,8 @@ FLUME_HD void add_particle_momentum(double m, double dx, const double* x, const 
   }
 }
 
-// The velocity and APIC matrix of a rigid motion v = v0 + omega x r at r = x - centre (in 2D only omega[2], about
-// the out-of-plane axis): C = [omega]x, the exact gradient of the field.
+// The velocity and APIC matrix of a rigid motion v = v0 + omega x r at r = x - centre (in 2D only omega[2],
+// about the out-of-plane axis): C = [omega]x, the exact gradient of the field.
 template <int D>
 FLUME_HD void rigid_motion(const double* v0, const double* omega, const double* r, double* v, double* C) {
   if constexpr (D == 3) {

@@ -1,10 +1,11 @@
 // One launch for the step's per-particle and per-node bodies (the AMReX ParallelFor habit, STYLE.md):
-// parallel_for(n, f) calls f(i) for i in [0, n). On a GPU it is a CUDA kernel (Thrust's for_each over a counting
-// range launches one); the CUDA source compiled for the host (FLUME_CUDA_EMULATION) runs it through Thrust's
-// sequential system; the CPU backend runs it as an OpenMP loop. The bodies are the same FLUME_HD functions.
+// parallel_for(n, f) calls f(i) for i in [0, n). On a GPU it is a CUDA kernel (Thrust's for_each over a
+// counting range launches one); the CUDA source compiled for the host (FLUME_CUDA_EMULATION) runs it through
+// Thrust's sequential system; the CPU backend runs it as an OpenMP loop. The bodies are the same FLUME_HD
+// functions.
 //
-// Each build of it lives in its own inline namespace, so that the CPU's and the emulated CUDA backend's, linked
-// into one program, are different functions rather than one function defined twice.
+// Each build of it lives in its own inline namespace, so that the CPU's and the emulated CUDA backend's,
+// linked into one program, are different functions rather than one function defined twice.
 #pragma once
 #include <cstddef>
 

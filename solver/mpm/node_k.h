@@ -1,7 +1,8 @@
-// One grid node's update against the boundaries, written once for both backends (MpmSolver::update_node on the
-// CPU, GridUpdate in cuda/mpm_cuda.cu): the scene's walls in scene order (paper eq. 2, their faces, the sub-cell
-// cover of a face between grid lines), the ghost search of free-slip walls and the domain box as a container.
-// The backends differ only in where the node's mass and momentum come from and where the results are stored.
+// One grid node's update against the boundaries, written once for both backends (MpmSolver::update_node on
+// the CPU, GridUpdate in cuda/mpm_cuda.cu): the scene's walls in scene order (paper eq. 2, their faces, the
+// sub-cell cover of a face between grid lines), the ghost search of free-slip walls and the domain box as a
+// container. The backends differ only in where the node's mass and momentum come from and where the results
+// are stored.
 #pragma once
 #include <cstdint>
 
@@ -21,7 +22,8 @@ FLUME_HD void accumulate(T* a, T v) {
 #endif
 }
 
-// One scene boundary, as the node update reads it. Which nodes lie on a wall is decided in double (mpm::wall_faces).
+// One scene boundary, as the node update reads it. Which nodes lie on a wall is decided in double
+// (mpm::wall_faces).
 template <int D, typename T>
 struct Wall {
   int box = 1;
@@ -40,8 +42,9 @@ struct Container {
   T mu = 0;
 };
 
-// What the ghost search found for a node (mpm::ghost_half_space): the reflection's offset in nodes, its normal
-// axes, whether it is undefined, and the scene wall whose load takes the image's push (-1: the domain box).
+// What the ghost search found for a node (mpm::ghost_half_space): the reflection's offset in nodes, its
+// normal axes, whether it is undefined, and the scene wall whose load takes the image's push (-1: the domain
+// box).
 template <int D>
 struct GhostSearch {
   int offset[D] = {};
@@ -51,14 +54,15 @@ struct GhostSearch {
   FLUME_HD bool found() const { return axes && !ambiguous; }
 };
 
-// The boundaries acting on the node at xn (double, m) with mass m and velocity v (after gravity): each scene wall
-// in `ids[0..count)` (null ids: walls 0..count-1) projects v through its faces or, where the node lies partly under
-// a face between grid lines, drags it (mpm::subcell_drag); each adds m (v_before - v) times `load_weight` (1/2 on
-// a symmetry plane) to its load in impulse[wall * D + d] (null: no load cell reads them). Then the ghost search
-// of the free-slip walls and the domain box, and the domain box as a container. Returns whether a wall set v.
+// The boundaries acting on the node at xn (double, m) with mass m and velocity v (after gravity): each scene
+// wall in `ids[0..count)` (null ids: walls 0..count-1) projects v through its faces or, where the node lies
+// partly under a face between grid lines, drags it (mpm::subcell_drag); each adds m (v_before - v) times
+// `load_weight` (1/2 on a symmetry plane) to its load in impulse[wall * D + d] (null: no load cell reads
+// them). Then the ghost search of the free-slip walls and the domain box, and the domain box as a container.
+// Returns whether a wall set v.
 template <int D, typename T>
-FLUME_HD bool apply_boundaries(const double* xn, T m, T* v, T dt, double load_weight, double dx, double subcell_rate0,
-                               const Wall<D, T>* walls, const int32_t* ids, int count,
+FLUME_HD bool apply_boundaries(const double* xn, T m, T* v, T dt, double load_weight, double dx,
+                               double subcell_rate0, const Wall<D, T>* walls, const int32_t* ids, int count,
                                const Container<D, T>& container, double* impulse, GhostSearch<D>& ghost) {
   bool on_wall = false;
   for (int q = 0; q < count; ++q) {
@@ -78,7 +82,8 @@ FLUME_HD bool apply_boundaries(const double* xn, T m, T* v, T dt, double load_we
           apply_wall<D>(held, n, nf, w.vb, w.bc, w.mu);
           subcell_drag<D>(v, held, cover, subcell_rate0, dt);
           if (impulse)
-            for (int d = 0; d < D; ++d) accumulate(&impulse[k * D + d], load_weight * double(m) * (before[d] - v[d]));
+            for (int d = 0; d < D; ++d)
+              accumulate(&impulse[k * D + d], load_weight * double(m) * (before[d] - v[d]));
         }
       }
       continue;
@@ -88,7 +93,8 @@ FLUME_HD bool apply_boundaries(const double* xn, T m, T* v, T dt, double load_we
     for (int d = 0; d < D; ++d) before[d] = v[d];
     apply_wall<D>(v, n, faces, w.vb, w.bc, w.mu);
     if (impulse)
-      for (int d = 0; d < D; ++d) accumulate(&impulse[k * D + d], load_weight * double(m) * (before[d] - v[d]));
+      for (int d = 0; d < D; ++d)
+        accumulate(&impulse[k * D + d], load_weight * double(m) * (before[d] - v[d]));
     if (w.bc == Bc::kSticky) {
       ghost.ambiguous = true;
     } else {

@@ -1,8 +1,9 @@
-// The CPU backend's bookkeeping of the nodes near a symmetry plane (mpm::SymmetryPlane). A node within kZone cells of
-// the plane on the modelled side, on it or beyond it is stored raw during the grid gather and updated after the
-// fold; the particles stay on the modelled side, so only nodes one cell beyond it receive mass, and their mirrors
-// lie within the zone. The grid blocks holding such nodes get a slot each, their raw nodes a dense entry
-// (slot * kNodes + local): no list to gather or sort. (The CUDA backend folds node by node instead.)
+// The CPU backend's bookkeeping of the nodes near a symmetry plane (mpm::SymmetryPlane). A node within kZone
+// cells of the plane on the modelled side, on it or beyond it is stored raw during the grid gather and
+// updated after the fold; the particles stay on the modelled side, so only nodes one cell beyond it receive
+// mass, and their mirrors lie within the zone. The grid blocks holding such nodes get a slot each, their raw
+// nodes a dense entry (slot * kNodes + local): no list to gather or sort. (The CUDA backend folds node by
+// node instead.)
 #pragma once
 #include <algorithm>
 #include <cstdint>
@@ -28,7 +29,9 @@ class SymmetryZone {
   explicit SymmetryZone(const SymmetryPlane& plane = {}) : sym_(plane) {}
   const SymmetryPlane& plane() const { return sym_; }
 
-  bool in_zone(int i) const { return symmetry_side(sym_, i) >= 0 || std::abs(2 * i - sym_.twice) <= 2 * kZone; }
+  bool in_zone(int i) const {
+    return symmetry_side(sym_, i) >= 0 || std::abs(2 * i - sym_.twice) <= 2 * kZone;
+  }
 
   // The slots, from the grid blocks (rebuilt with them).
   void index(const std::vector<uint64_t>& gkeys) {
@@ -53,12 +56,13 @@ class SymmetryZone {
     const long g = blocks_[q / kNodes];
     int blk[D];
     unpack_key<D>(gkeys[g], blk);
-    for (int d = D - 1, r = static_cast<int>(q % kNodes); d >= 0; --d, r /= kBlock) node[d] = blk[d] * kBlock + r % kBlock;
+    for (int d = D - 1, r = static_cast<int>(q % kNodes); d >= 0; --d, r /= kBlock)
+      node[d] = blk[d] * kBlock + r % kBlock;
     return g;
   }
 
-  // The raw entry of a node's mirror across the plane, or -1 where the mirror is outside the zone or no active
-  // block holds it.
+  // The raw entry of a node's mirror across the plane, or -1 where the mirror is outside the zone or no
+  // active block holds it.
   long mirror_entry(const int* node, const std::vector<uint64_t>& gkeys) const {
     int mirror[D];
     for (int d = 0; d < D; ++d) mirror[d] = node[d];

@@ -1,7 +1,8 @@
-// The CPU backend's race-free scatter: each particle block scatters (P2G) into its own tile of kTile^D nodes, a
-// private buffer no other thread touches; each grid block then gathers the overlapping parts of the tiles of its
-// 3^D neighbouring particle blocks in a fixed order. No atomics, and the result does not depend on the number of
-// threads. Here: where a tile node lies in the grid, and which part of a tile a block's particles reach.
+// The CPU backend's race-free scatter: each particle block scatters (P2G) into its own tile of kTile^D nodes,
+// a private buffer no other thread touches; each grid block then gathers the overlapping parts of the tiles
+// of its 3^D neighbouring particle blocks in a fixed order. No atomics, and the result does not depend on the
+// number of threads. Here: where a tile node lies in the grid, and which part of a tile a block's particles
+// reach.
 #pragma once
 #include <algorithm>
 #include <cstdint>
@@ -41,13 +42,14 @@ std::vector<TileNode> make_tile_map() {
   return map;
 }
 
-// The tile nodes that the particles [begin, end) of block `blk` reach: the union of their 3^D stencils, [lo, hi)
-// per axis in tile coordinates. P2G zeroes and fills only these, the grid gather adds only these (the rest of the
-// tile would add exact zeros) and G2P fetches only these from the grid: a block of a thin sheet (a flow one or two
-// cells deep) reaches a third of its tile, a full block two thirds of it (a particle sits up to a cell outside its
-// block, so the tile is kBlock + 4 wide). x: D arrays of positions.
+// The tile nodes that the particles [begin, end) of block `blk` reach: the union of their 3^D stencils, [lo,
+// hi) per axis in tile coordinates. P2G zeroes and fills only these, the grid gather adds only these (the
+// rest of the tile would add exact zeros) and G2P fetches only these from the grid: a block of a thin sheet
+// (a flow one or two cells deep) reaches a third of its tile, a full block two thirds of it (a particle sits
+// up to a cell outside its block, so the tile is kBlock + 4 wide). x: D arrays of positions.
 template <int D, typename T>
-TileBox<D> tile_box(const int* blk, const T* const* x, uint32_t begin, uint32_t end, const T* lo_grid, T inv_dx) {
+TileBox<D> tile_box(const int* blk, const T* const* x, uint32_t begin, uint32_t end, const T* lo_grid,
+                    T inv_dx) {
   TileBox<D> box;
   for (int d = 0; d < D; ++d) {
     const int origin = blk[d] * kBlock - 1;

@@ -148,11 +148,11 @@ TEST(Checkpoint, ResumedBasinRepeatsTheUninterruptedRun) {
 }
 
 #ifdef FLUME_CUDA_EMULATION_AVAILABLE
-// The CUDA backend's source on the host (solver/cuda/mpm_cuda.h): the same basin, stopped mid-release. Its sums
-// run in a fixed order (sequential), so its diagnostics repeat to the bit as well.
+// The CUDA backend's source on the host (solver/cuda/mpm_cuda.h): the same basin, stopped mid-release. Its
+// sums run in a fixed order (sequential), so its diagnostics repeat to the bit as well.
 TEST(Checkpoint, CudaEmulationResumedBasinRepeatsTheUninterruptedRun) {
-  const Scene scene =
-      load_scene(waseda("waseda_2d.json"), {parse_override("solver.dx=0.04"), parse_override("solver.end_time=1.2")});
+  const Scene scene = load_scene(waseda("waseda_2d.json"),
+                                 {parse_override("solver.dx=0.04"), parse_override("solver.end_time=1.2")});
   expect_exact_resume(scene, 0.55, [](const Scene& s) { return make_cuda_host_emulation(s, {}); });
 }
 #endif

@@ -11,9 +11,9 @@
 #include <cmath>
 #include <string>
 
+#include "rotation.h"
 #include "solver/scene.h"
 #include "solver/simulation.h"
-#include "rotation.h"
 #include "test_util.h"
 
 namespace flume {

@@ -25,11 +25,11 @@
 #include <functional>
 #include <string>
 
+#include "rotation.h"
 #include "solver/cuda/mpm_cuda.h"
 #include "solver/run.h"
 #include "solver/scene.h"
 #include "solver/simulation.h"
-#include "rotation.h"
 #include "symmetric_tank.h"
 #include "test_util.h"
 
@@ -288,11 +288,12 @@ TEST(CudaEmulation, WasedaGateAndQuay2DDoubleMatchesCpu) {
                              {{"solver.dx", "0.04"}, {"solver.precision", "double"}, {"solver.end_time", "0.8"}});
   expect_within(compare(s, cpu, emulated), double_bounds(0.04, 0.9));
 }
-// The Waseda apron fed through the inflow boundary (solver/inflow.h) by a section the full basin recorded: the
-// buffer's lattice, the particles it adds and removes, and the re-sorts they force. The bore crosses the inflow
-// plane from about 2.3 s.
+// The Waseda apron fed through the inflow boundary (solver/inflow.h) by a section the full basin recorded:
+// the buffer's lattice, the particles it adds and removes, and the re-sorts they force. The bore crosses the
+// inflow plane from about 2.3 s.
 TEST(CudaEmulation, InflowApron2DDoubleMatchesCpu) {
-  const auto dir = std::filesystem::temp_directory_path() / ("flume_cuda_inflow_" + std::to_string(::getpid()));
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("flume_cuda_inflow_" + std::to_string(::getpid()));
   std::filesystem::remove_all(dir);
   const Scene feed = load_scene(source_dir() + "/scenes/waseda/waseda_2d.json",
                                 {{"solver.dx", "0.04"}, {"solver.end_time", "2.6"}});
@@ -308,8 +309,8 @@ TEST(CudaEmulation, InflowApron2DDoubleMatchesCpu) {
 TEST(CudaEmulation, SymmetryPlane3DDoubleMatchesCpu) {
   expect_within(compare(half_tank(0.15), cpu, emulated), double_bounds(0.02, 0.3));
 }
-// The angular momentum diagnostic's APIC spin against theory (rotation.h; the CPU's in test_conservation): the
-// CUDA source had it with the opposite sign.
+// The angular momentum diagnostic's APIC spin against theory (rotation.h; the CPU's in test_conservation):
+// the CUDA source had it with the opposite sign.
 TEST(CudaEmulation, RigidRotationAngularMomentumMatchesTheory) {
   for (int dim : {2, 3}) {
     SCOPED_TRACE(std::to_string(dim) + "D");
@@ -319,16 +320,17 @@ TEST(CudaEmulation, RigidRotationAngularMomentumMatchesTheory) {
     test::expect_rigid_rotation_angular_momentum(*sim, scene, omega);
   }
 }
-// Free rotation conserves the total, orbital plus spin, to round-off (the CPU's test runs 1000 steps; 200 here,
-// the emulation being single-threaded): the two parts trade as the square blob rounds, so a spin of the wrong
-// sign drifts.
+// Free rotation conserves the total, orbital plus spin, to round-off (the CPU's test runs 1000 steps; 200
+// here, the emulation being single-threaded): the two parts trade as the square blob rounds, so a spin of the
+// wrong sign drifts.
 TEST(CudaEmulation, AngularMomentumOfASpinningBlob) {
   for (int dim : {2, 3}) {
     SCOPED_TRACE(std::to_string(dim) + "D");
     auto sim = emulated(test::free_blob(dim, dim == 2 ? 0.005 : 0.02, 0.1));
     const double omega[3] = {dim == 3 ? 3.0 : 0.0, dim == 3 ? -4.0 : 0.0, 10.0};
     const double worst = test::spinning_blob_drift(*sim, omega, 200);
-    std::printf("[ info ] %dD: 200 steps to t = %.4f s: max |L - L0| / |L0| = %.2e\n", dim, sim->time(), worst);
+    std::printf("[ info ] %dD: 200 steps to t = %.4f s: max |L - L0| / |L0| = %.2e\n", dim, sim->time(),
+                worst);
     EXPECT_LT(worst, 1e-11);
   }
 }
