@@ -311,7 +311,7 @@ TEST_F(SceneCli, HostileDocuments) {
 TEST_F(SceneCli, HostileOverridePaths) {
   const std::string file = write("valid.json", kValid);
   for (const std::string path : {"..", ".solver.dx", "solver.dx.", "solver..dx"}) {
-    for (const std::string cmd : {"check ", "run --out " + (dir_ / "out").string() + " "}) {
+    for (const std::string& cmd : std::vector<std::string>{"check ", "run --out " + (dir_ / "out").string() + " "}) {
       SCOPED_TRACE(cmd + path);
       const CliResult r = flume(cmd + file + " --set " + path + "=1");
       EXPECT_EQ(r.rc, kExitInvalidInput) << r.err;
