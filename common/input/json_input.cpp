@@ -29,7 +29,7 @@ class Guard {
       case json::parse_event_t::array_start:
         start_element();
         if (static_cast<int>(frames_.size()) >= limits_.max_depth)
-          throw LimitExceeded{path(true), "nested deeper than " + std::to_string(limits_.max_depth) +
+          throw LimitExceeded{path(false), "nested deeper than " + std::to_string(limits_.max_depth) +
                                               " levels (allowed: at most " + std::to_string(limits_.max_depth) + ")"};
         frames_.push_back({event == json::parse_event_t::array_start, std::string(), 0});
         break;
