@@ -12,6 +12,7 @@
 #include <stdexcept>
 
 #include "common/errors.h"
+#include "common/input/json_input.h"
 #include "store/h5/run_file.h"
 
 namespace flume::calibration {
@@ -78,8 +79,19 @@ std::vector<TargetRecord> read_target_csv(
     const std::string& file, const std::vector<std::pair<std::string, std::string>>& gauge_columns,
     const std::vector<std::string>& gauges, double window_start_s, double window_end_s, double weight,
     const std::string& spec_field) {
-  std::ifstream in(file);
-  if (!in) throw InputError(file, "", "cannot open the target record (" + spec_field + ")");
+  return parse_target_csv(read_target_text(file, spec_field), file, gauge_columns, gauges, window_start_s,
+                          window_end_s, weight, spec_field);
+}
+
+std::string read_target_text(const std::string& file, const std::string& spec_field) {
+  return input::read_input_file(file, kMaxTargetBytes, "target record (" + spec_field + ")");
+}
+
+std::vector<TargetRecord> parse_target_csv(
+    const std::string& text, const std::string& file,
+    const std::vector<std::pair<std::string, std::string>>& gauge_columns, const std::vector<std::string>& gauges,
+    double window_start_s, double window_end_s, double weight, const std::string& spec_field) {
+  std::istringstream in(text);
   std::string line;
   int line_no = 0;
   std::vector<std::string> header;
@@ -99,6 +111,10 @@ std::vector<TargetRecord> read_target_csv(
   if (header.size() < 2)
     throw InputError(file, "line " + std::to_string(header_line),
                      "the header has one column; expected time then one column per gauge, e.g. 'time_s,WG1'");
+  if (header.size() > kMaxTargetColumns)
+    throw InputError(file, "line " + std::to_string(header_line),
+                     "the header has " + std::to_string(header.size()) + " columns (allowed: at most " +
+                         std::to_string(kMaxTargetColumns) + ")");
 
   // Units: time in s or ms, elevation in m, cm or mm; the scale to SI of each column.
   std::vector<double> scale(header.size(), 1.0);

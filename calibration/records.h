@@ -6,6 +6,7 @@
 // elevation above still water, named by its header, optionally with a unit: `WG1`, `WG1 [m]`, `WG1 [mm]`,
 // `WG1 [cm]` (no unit: metres). Times must increase strictly; every cell must be a finite decimal number.
 #pragma once
+#include <cstddef>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -27,6 +28,15 @@ std::vector<TargetRecord> read_target_csv(
     const std::string& file, const std::vector<std::pair<std::string, std::string>>& gauge_columns,
     const std::vector<std::string>& gauges, double window_start_s, double window_end_s, double weight,
     const std::string& spec_field);
+// The same on the file's text (`file` names it in messages).
+std::vector<TargetRecord> parse_target_csv(
+    const std::string& text, const std::string& file,
+    const std::vector<std::pair<std::string, std::string>>& gauge_columns, const std::vector<std::string>& gauges,
+    double window_start_s, double window_end_s, double weight, const std::string& spec_field);
+// A target file's text, bounded before it is read (a regular file of at most kMaxTargetBytes).
+inline constexpr std::size_t kMaxTargetBytes = std::size_t{64} << 20;
+inline constexpr std::size_t kMaxTargetColumns = 1000;
+std::string read_target_text(const std::string& file, const std::string& spec_field);
 
 struct SimRecord {
   std::vector<double> time, elevation;

@@ -16,6 +16,7 @@
 #include "campaigns/run_folders.h"
 #include "campaigns/spec.h"
 #include "common/errors.h"
+#include "common/input/json_input.h"
 #include "solver/scene.h"
 
 namespace flume::calibration {
@@ -31,22 +32,7 @@ std::string fmt(double v) {
   return s.str();
 }
 
-const char* type_name(const json& j) {
-  switch (j.type()) {
-    case json::value_t::null:
-      return "null";
-    case json::value_t::boolean:
-      return "a boolean";
-    case json::value_t::string:
-      return "a string";
-    case json::value_t::array:
-      return "an array";
-    case json::value_t::object:
-      return "an object";
-    default:
-      return "a number";
-  }
-}
+using input::type_name;
 
 // A JSON object being read; finish() rejects fields nobody asked for, so a typo is an error.
 class Reader {
@@ -163,12 +149,6 @@ std::vector<std::string> local_names() {
   return out;
 }
 
-std::string read_text(const std::string& file) {
-  std::ifstream in(file);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
 
 std::string resolve(const std::string& path, const std::string& base_dir) {
   fs::path p(path);
@@ -242,12 +222,7 @@ bool is_local_algorithm(const std::string& name) {
 
 CalibrationSpec parse_calibration_spec(const std::string& json_text, const std::string& file_label,
                                        const std::string& base_dir) {
-  json root_json;
-  try {
-    root_json = json::parse(json_text);
-  } catch (const json::parse_error& e) {
-    throw InputError(file_label, "", std::string("not valid JSON: ") + e.what());
-  }
+  const json root_json = input::parse_json_document(json_text, file_label);
   CalibrationSpec spec;
   spec.file = file_label;
   Reader root(root_json, "", spec.file);
@@ -271,7 +246,7 @@ CalibrationSpec parse_calibration_spec(const std::string& json_text, const std::
                 "cannot open '" + scene + "' (looked in the current directory and next to the spec)");
     identity["scene"] = spec.scene;
     identity["scene_content"] =
-        campaigns::text_hash(read_text(spec.scene));  // an edited scene is a new scene
+        campaigns::text_hash(read_scene_file(spec.scene));  // an edited scene is a new scene
   }
 
   {
@@ -452,7 +427,7 @@ CalibrationSpec parse_calibration_spec(const std::string& json_text, const std::
     spec.gauges = campaigns::gauge_model_gauges();
     spec.record_end_s = campaigns::gauge_model_end_time(spec.overrides);
   } else {
-    const std::string text = read_text(spec.scene);
+    const std::string text = read_scene_file(spec.scene);
     auto load = [&](const std::vector<std::pair<std::string, std::string>>& sets) {
       std::vector<Override> o;
       for (const auto& [path, value] : sets) o.push_back({path, value});
@@ -531,7 +506,7 @@ CalibrationSpec parse_calibration_spec(const std::string& json_text, const std::
     }
     spec.target_files.push_back(tf);
     target_ids.push_back(
-        {{"file", tf.file}, {"content", campaigns::text_hash(read_text(tf.file))}, {"spec", targets[i]}});
+        {{"file", tf.file}, {"content", campaigns::text_hash(read_target_text(tf.file, "targets." + std::to_string(i)))}, {"spec", targets[i]}});
   }
   identity["targets"] = target_ids;
   Objective check(spec.objective, spec.targets,
@@ -543,11 +518,8 @@ CalibrationSpec parse_calibration_spec(const std::string& json_text, const std::
 }
 
 CalibrationSpec load_calibration_spec(const std::string& file) {
-  std::ifstream in(file);
-  if (!in) throw InputError(file, "", "cannot open the calibration spec");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return parse_calibration_spec(ss.str(), file, fs::path(file).parent_path().string());
+  return parse_calibration_spec(input::read_input_file(file, input::JsonLimits{}.max_bytes, "calibration spec"), file,
+                                fs::path(file).parent_path().string());
 }
 
 }  // namespace flume::calibration

@@ -16,6 +16,7 @@
 #include "campaigns/models.h"
 #include "campaigns/run_folders.h"
 #include "common/errors.h"
+#include "common/input/json_input.h"
 #include "solver/scene.h"
 
 namespace flume::campaigns {
@@ -30,16 +31,7 @@ std::string fmt(double v) {
   return s.str();
 }
 
-const char* type_name(const json& j) {
-  switch (j.type()) {
-    case json::value_t::null: return "null";
-    case json::value_t::boolean: return "a boolean";
-    case json::value_t::string: return "a string";
-    case json::value_t::array: return "an array";
-    case json::value_t::object: return "an object";
-    default: return "a number";
-  }
-}
+using input::type_name;
 
 // A JSON object being read; finish() rejects fields nobody asked for, so a typo is an error.
 class Reader {
@@ -231,12 +223,6 @@ std::string resolve_scene(const std::string& path, const std::string& base_dir) 
   return "";
 }
 
-std::string read_file(const std::string& file) {
-  std::ifstream in(file);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
 
 // The overrides and the values design point k of a list design sets, as `--set` pairs (not its scene).
 std::vector<std::pair<std::string, std::string>> list_point_sets(const CampaignSpec& spec, size_t k) {
@@ -270,7 +256,7 @@ void validate_list_points(const CampaignSpec& spec) {
       continue;
     }
     const std::string& scene = spec.point_scenes.at(k);
-    if (!texts.count(scene)) texts[scene] = read_file(scene);
+    if (!texts.count(scene)) texts[scene] = read_scene_file(scene);
     std::vector<Override> all;
     for (const auto& [path, value] : sets) all.push_back({path, value});
     try {
@@ -386,7 +372,7 @@ void validate_against_target(const CampaignSpec& spec, const sampling::Design& d
     return;
   }
 
-  const std::string text = read_file(spec.scene);
+  const std::string text = read_scene_file(spec.scene);
   std::vector<Override> fixed;
   for (const auto& [path, value] : spec.overrides) fixed.push_back({path, value});
   try {
@@ -403,7 +389,7 @@ void validate_against_target(const CampaignSpec& spec, const sampling::Design& d
     } catch (const InputError& e) {
       if (e.field() == spec.parameters[j].path || spec.parameters[j].path.rfind(e.field() + ".", 0) == 0 ||
           e.problem().find("unknown field") != std::string::npos || e.problem().find("no such") != std::string::npos ||
-          e.problem().find("cannot set") != std::string::npos)
+          e.problem().find("cannot set") != std::string::npos || e.problem().find("empty segment") != std::string::npos)
         throw InputError(spec.file, "parameters." + std::to_string(j) + ".path",
                          "'" + spec.parameters[j].path + "' is not a field of the scene: " + e.what());
       throw InputError(spec.file, "parameters." + std::to_string(j) + ".distribution",
@@ -499,12 +485,7 @@ static void read_parameters(Reader& root, const json& root_json, CampaignSpec& s
 
 CampaignSpec parse_campaign_spec(const std::string& json_text, const std::string& file_label,
                                  const std::string& base_dir) {
-  json root_json;
-  try {
-    root_json = json::parse(json_text);
-  } catch (const json::parse_error& e) {
-    throw InputError(file_label, "", std::string("not valid JSON: ") + e.what());
-  }
+  const json root_json = input::parse_json_document(json_text, file_label);
   CampaignSpec spec;
   spec.file = file_label;
   Reader root(root_json, "", spec.file);
@@ -634,12 +615,7 @@ CampaignSpec parse_campaign_spec(const std::string& json_text, const std::string
 CampaignSpec parse_spec_parameters(const std::string& json_text, const std::string& file_label) {
   CampaignSpec spec;
   spec.file = file_label;
-  json root_json;
-  try {
-    root_json = json::parse(json_text);
-  } catch (const json::parse_error& e) {
-    throw InputError(file_label, "", std::string("not valid JSON: ") + e.what());
-  }
+  const json root_json = input::parse_json_document(json_text, file_label);
   Reader root(root_json, "", spec.file);
   spec.listed = root_json.contains("design") && root_json["design"].is_object() &&
                 root_json["design"].contains("type") && root_json["design"]["type"] == "list";
@@ -649,12 +625,8 @@ CampaignSpec parse_spec_parameters(const std::string& json_text, const std::stri
 }
 
 CampaignSpec load_campaign_spec(const std::string& file) {
-  std::ifstream in(file);
-  if (!in) throw InputError(file, "", "cannot open the campaign spec");
-  std::stringstream ss;
-  ss << in.rdbuf();
   const std::string dir = fs::path(file).parent_path().string();
-  return parse_campaign_spec(ss.str(), file, dir);
+  return parse_campaign_spec(input::read_input_file(file, input::JsonLimits{}.max_bytes, "campaign spec"), file, dir);
 }
 
 }  // namespace flume::campaigns

@@ -19,7 +19,7 @@
 #include "common/command.h"
 #include "common/errors.h"
 #include "common/plot/figure.h"
-#include "solver/run_output.h"
+#include "common/gauge_summary.h"
 #include "store/h5/run_file.h"
 
 namespace flume::report {

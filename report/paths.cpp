@@ -15,11 +15,12 @@
 
 #include "common/command.h"
 #include "common/errors.h"
+#include "common/input/json_input.h"
+#include "common/input/overrides.h"
 #include "common/plot/figure.h"
 #include "report/debris.h"
 #include "report/geometry.h"
 #include "report/map.h"
-#include "solver/scene.h"
 #include "store/h5/run_file.h"
 
 namespace flume::report {
@@ -81,14 +82,9 @@ RunPaths read_run(const std::string& dir, const std::vector<Override>& sets) {
   r.dir = dir;
   const std::string run_json = (fs::path(dir) / "run.json").string();
   const std::string h5_file = (fs::path(dir) / "result.h5").string();
-  std::ifstream in(run_json);
-  if (!in) throw InputError(run_json, "", "cannot open (is " + dir + " the --out folder of a finished `flume run`?)");
-  json run;
-  try {
-    in >> run;
-  } catch (const json::exception& e) {
-    throw InputError(run_json, "", std::string("not valid JSON: ") + e.what());
-  }
+  if (!std::ifstream(run_json))
+    throw InputError(run_json, "", "cannot open (is " + dir + " the --out folder of a finished `flume run`?)");
+  const json run = input::load_json_document(run_json, "run record");
   if (!fs::exists(h5_file)) throw InputError(h5_file, "", "missing: the run did not finish");
   json scene = run.value("scene_json", json::object());
   if (scene.empty()) {
@@ -97,7 +93,7 @@ RunPaths read_run(const std::string& dir, const std::vector<Override>& sets) {
       throw InputError(run_json, "scene_json",
                        "missing, and the scene file it names ('" + file +
                            "') is not there: run it again with this flume, which records the scene");
-    scene = json::parse(scene_json_with_overrides(file, sets));
+    scene = input::load_with_overrides(file, "scene file", sets);
   } else if (!sets.empty()) {
     throw cli::UsageError("--set", "only for runs whose run.json has no scene_json; " + run_json + " has one");
   }

@@ -169,9 +169,12 @@ std::size_t runs_for_width(double std, double width, double confidence) {
   if (!(width > 0) || !(std >= 0)) return 0;
   if (std == 0) return 2;
   const double z = OT::DistFunc::qNormal(1 - (1 - confidence) / 2);
-  // Start from the normal approximation and step up until the Student interval fits.
-  std::size_t n =
-      std::max<std::size_t>(2, static_cast<std::size_t>(std::ceil(std::pow(2 * z * std / width, 2))));
+  // Start from the normal approximation and step up until the Student interval fits. Beyond 1e15 runs the
+  // answer is "never" in practice: returned as that bound (a mean near zero against its spread gave 1e25,
+  // which overflowed the cast and left the loop stepping from a garbage start).
+  const double normal = std::ceil(std::pow(2 * z * std / width, 2));
+  if (!(normal < kMaxRunsNeeded)) return static_cast<std::size_t>(kMaxRunsNeeded);
+  std::size_t n = std::max<std::size_t>(2, static_cast<std::size_t>(normal));
   while (2 * OT::DistFunc::qStudent(static_cast<double>(n - 1), 1 - (1 - confidence) / 2) * std /
              std::sqrt(static_cast<double>(n)) >
          width)

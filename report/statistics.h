@@ -79,7 +79,8 @@ struct RunningMean {
 RunningMean running_mean(const std::vector<double>& x, double confidence);
 
 // Runs for which the Student interval of the mean is `width` wide at the sample's standard deviation:
-// the smallest n with 2 t_{n-1} s / sqrt(n) <= width.
+// the smallest n with 2 t_{n-1} s / sqrt(n) <= width, at most kMaxRunsNeeded.
+inline constexpr double kMaxRunsNeeded = 1e15;
 std::size_t runs_for_width(double std, double width, double confidence);
 
 }  // namespace flume::report

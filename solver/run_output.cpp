@@ -19,29 +19,6 @@ std::string status_name(RunStatus s) {
   }
 }
 
-GaugeSummary summarize_gauge(const std::vector<double>& time, const std::vector<double>& value, double threshold) {
-  GaugeSummary s;
-  bool have_first = false;
-  for (std::size_t i = 0; i < value.size() && i < time.size(); ++i) {
-    const double e = value[i];
-    if (!std::isfinite(e)) continue;
-    if (!have_first) {
-      s.first = e;
-      have_first = true;
-    }
-    if (!s.has_peak || e > s.peak) {
-      s.peak = e;
-      s.peak_time = time[i];
-      s.has_peak = true;
-    }
-    if (!s.arrived && e >= s.first + threshold) {
-      s.arrived = true;
-      s.arrival_time = time[i];
-    }
-  }
-  return s;
-}
-
 std::map<std::string, double> compute_metrics(const Scene& scene, const Record& record, double arrival_threshold_m) {
   std::map<std::string, double> m;
   for (const auto& [name, ts] : record.gauges) {

@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "common/errors.h"
+#include "common/input/json_input.h"
 #include "solver/inflow.h"
 
 namespace flume {
@@ -24,16 +25,7 @@ std::string fmt(double v) {
   return s.str();
 }
 
-const char* type_name(const json& j) {
-  switch (j.type()) {
-    case json::value_t::null: return "null";
-    case json::value_t::boolean: return "a boolean";
-    case json::value_t::string: return "a string";
-    case json::value_t::array: return "an array";
-    case json::value_t::object: return "an object";
-    default: return "a number";
-  }
-}
+using input::type_name;
 
 // A JSON object being read: each accessor marks its key as used, and finish() rejects the rest, so a
 // misspelt field is an error rather than a silently ignored default.
@@ -181,39 +173,49 @@ class Reader {
 };
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr std::size_t kMaxSceneJsonBytes = 60000;
 
-void apply_override(json& root, const Override& o, const std::string& file) {
-  json value;
-  try {
-    value = json::parse(o.value);
-  } catch (const json::parse_error&) {
-    value = o.value;  // not JSON: a plain string such as `float` or `exponential`
+// What the solver allocates from a scene, bounded before it is (docs/reliability.md, "Input limits"): the
+// particles its water boxes seed and the cells across its domain.
+constexpr int kDefaultMaxParticles = 100000000;   // ~25 GB in double precision in 3D: a large GPU node
+constexpr int kHardMaxParticles = 2000000000;     // within the int the field is read into
+constexpr double kMaxCellsPerAxis = 4.0e6;         // block keys pack 21 bits per axis (2^21 blocks of 4 cells)
+
+// Particles seeded per box (seed_water in solver/seeding.h: lround(L / spacing) per axis, at least 1), in
+// double so that a dx of 1e-9 m cannot overflow the count.
+void check_allocation_bounds(const Scene& sc, Reader& root, int dim) {
+  const auto& s = sc.solver;
+  const double per_axis = std::round(std::pow(s.ppc, 1.0 / dim));
+  const double spacing = s.dx / per_axis;
+  for (int d = 0; d < dim; ++d) {
+    const double cells = (sc.domain_hi[d] - sc.domain_lo[d]) / s.dx;
+    if (cells > kMaxCellsPerAxis)
+      root.fail("solver.dx", "gives " + fmt(cells) + " cells across the domain on axis " + std::to_string(d) +
+                                 " (allowed: at most " + fmt(kMaxCellsPerAxis) + ", i.e. dx >= " +
+                                 fmt((sc.domain_hi[d] - sc.domain_lo[d]) / kMaxCellsPerAxis) + " m)");
   }
-  json* node = &root;
-  std::stringstream ss(o.path);
-  std::string seg, walked;
-  std::vector<std::string> segs;
-  while (std::getline(ss, seg, '.')) segs.push_back(seg);
-  if (segs.empty() || o.path.empty()) throw InputError(file, o.path, "empty override path");
-  for (size_t i = 0; i < segs.size(); ++i) {
-    const std::string& s = segs[i];
-    const bool last = i + 1 == segs.size();
-    walked += (walked.empty() ? "" : ".") + s;
-    if (node->is_array()) {
-      char* end = nullptr;
-      const long idx = std::strtol(s.c_str(), &end, 10);
-      if (*end || idx < 0 || idx >= static_cast<long>(node->size()))
-        throw InputError(file, walked, "no such array element (the array has " + std::to_string(node->size()) +
-                                           " elements)");
-      node = &(*node)[idx];
-    } else if (node->is_object() || node->is_null()) {
-      // Missing keys are created: the strict parse that follows rejects any that are not scene fields.
-      node = &(*node)[s];
-    } else {
-      throw InputError(file, walked, "cannot set a field inside a value that is not an object or array");
+  double total = 0;
+  for (std::size_t w = 0; w < sc.water.size(); ++w) {
+    double n = 1;
+    for (int d = 0; d < dim; ++d) {
+      const double along = (sc.water[w].hi[d] - sc.water[w].lo[d]) / spacing;
+      // Thinner than half a particle spacing, the box has no lattice row of its own: one particle a spacing
+      // wide would carry it (dx 1e9 m on the Waseda basin left 3 particles).
+      if (along < 0.5)
+        root.fail("solver.dx", "does not resolve water." + std::to_string(w) + ": it is " +
+                                   fmt(sc.water[w].hi[d] - sc.water[w].lo[d]) + " m on axis " + std::to_string(d) +
+                                   ", under half a particle spacing (0.5 dx / ppc^(1/D) = " + fmt(0.5 * spacing) +
+                                   " m); allowed: dx <= " +
+                                   fmt(2 * per_axis * (sc.water[w].hi[d] - sc.water[w].lo[d])) + " m");
+      n *= std::max(1.0, std::round(along));
     }
-    if (last) *node = value;
+    total += n;
   }
+  if (total > s.max_particles)
+    root.fail("solver.dx", "seeds about " + fmt(total) + " particles at dx " + fmt(s.dx) + " m and ppc " +
+                               std::to_string(s.ppc) + " (allowed: at most solver.max_particles = " +
+                               std::to_string(s.max_particles) + ", which may be raised to " +
+                               std::to_string(kHardMaxParticles) + " where the memory allows)");
 }
 
 Shape read_shape(Reader& r, int dim) {
@@ -599,6 +601,7 @@ Scene parse(const json& root_json, const std::string& file) {
     for (int d = 0; d < dim; ++d) min_extent = std::min(min_extent, sc.domain_hi[d] - sc.domain_lo[d]);
     s.dx = r.number("dx", std::nullopt, 0.0, min_extent / 4, true, false);
     s.ppc = r.integer("ppc", dim == 2 ? 4 : 8, 1, 64);
+    s.max_particles = r.integer("max_particles", kDefaultMaxParticles, 1, kHardMaxParticles);
     const int per_axis = static_cast<int>(std::lround(std::pow(s.ppc, 1.0 / dim)));
     int p = 1;
     for (int d = 0; d < dim; ++d) p *= per_axis;
@@ -724,6 +727,7 @@ Scene parse(const json& root_json, const std::string& file) {
       r.finish();
       sc.water.push_back(w);
     }
+    check_allocation_bounds(sc, root, dim);
   }
 
   {
@@ -869,42 +873,33 @@ Scene parse(const json& root_json, const std::string& file) {
 
 }  // namespace
 
-Override parse_override(const std::string& text) {
-  const auto eq = text.find('=');
-  if (eq == std::string::npos || eq == 0)
-    throw InputError("--set", text, "expected path=value, e.g. --set solver.dx=0.01");
-  return {text.substr(0, eq), text.substr(eq + 1)};
-}
-
 namespace {
 
 // The scene's JSON with the overrides applied, not yet validated.
 json parse_with_overrides(const std::string& json_text, const std::string& file_label,
                           const std::vector<Override>& overrides) {
-  json root;
-  try {
-    root = json::parse(json_text);
-  } catch (const json::parse_error& e) {
-    throw InputError(file_label, "", std::string("not valid JSON: ") + e.what());
-  }
-  for (const auto& o : overrides) apply_override(root, o, file_label + " (--set " + o.path + ")");
+  json root = input::parse_json_document(json_text, file_label);
+  for (const auto& o : overrides) input::apply_override(root, o, file_label + " (--set " + o.path + ")");
   return root;
 }
 
-std::string read_scene_file(const std::string& file) {
-  std::ifstream in(file);
-  if (!in) throw InputError(file, "", "cannot open the scene file");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
 }  // namespace
+
+std::string read_scene_file(const std::string& file) {
+  return input::read_input_file(file, input::JsonLimits{}.max_bytes, "scene file");
+}
 
 Scene parse_scene_text(const std::string& json_text, const std::string& file_label,
                        const std::vector<Override>& overrides) {
   json root = parse_with_overrides(json_text, file_label, overrides);
   const std::string source = root.dump();
+  // result.h5 keeps the scene whole as one attribute, and HDF5 caps an object's attributes at 64 KiB: a larger
+  // scene (a 10 MB name, thousands of water boxes) ran to the end and then failed to write its result.
+  if (source.size() > kMaxSceneJsonBytes)
+    throw InputError(file_label, "",
+                     "the scene with its overrides is " + std::to_string(source.size()) +
+                         " bytes as compact JSON (allowed: at most " + std::to_string(kMaxSceneJsonBytes) +
+                         ", stored whole in result.h5)");
   if (root.is_object() && root.contains("basin")) {
     if (!root.contains("dimension") || !root["dimension"].is_number_integer())
       throw InputError(file_label, "dimension", "is required (2 or 3)");
@@ -933,10 +928,6 @@ Scene parse_scene_text(const std::string& json_text, const std::string& file_lab
 
 Scene load_scene(const std::string& file, const std::vector<Override>& overrides) {
   return parse_scene_text(read_scene_file(file), file, overrides);
-}
-
-std::string scene_json_with_overrides(const std::string& file, const std::vector<Override>& overrides) {
-  return parse_with_overrides(read_scene_file(file), file, overrides).dump();
 }
 
 const char* to_string(BoundaryCondition c) {

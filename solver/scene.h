@@ -6,6 +6,8 @@
 #include <string>
 #include <vector>
 
+#include "common/input/overrides.h"
+
 namespace flume {
 
 enum class Precision { kFloat, kDouble };
@@ -50,6 +52,7 @@ struct SolverSettings {
   SolverMethod method = SolverMethod::kMpm;
   double dx = 0.01;
   int ppc = 4;  // particles per cell per axis is ppc^(1/D) rounded: ppc must be a perfect power (2D: 1,4,9; 3D: 1,8,27)
+  int max_particles = 100000000;  // bound on the particles the water boxes seed, checked before allocating
   double cfl = 0.4;
   Precision precision = Precision::kDouble;
   double end_time = 1.0;
@@ -202,24 +205,15 @@ struct Scene {
   InflowSettings inflow;
 };
 
-// A `--set path=value` override. The value is read as JSON where it parses as JSON, else as a string.
-struct Override {
-  std::string path;   // dotted; numeric segments index arrays ("water.0.hi")
-  std::string value;  // raw text from the command line
-};
-
-// Parses "path=value". Throws InputError when there is no '='.
-Override parse_override(const std::string& text);
-
 // Reads, overrides and validates a scene. Throws flume::InputError naming the file, the field path and
 // what is allowed. Unknown fields are errors (a typo in a campaign's parameter path must not pass silently).
 Scene load_scene(const std::string& file, const std::vector<Override>& overrides = {});
 Scene parse_scene_text(const std::string& json_text, const std::string& file_label,
                        const std::vector<Override>& overrides = {});
 
-// The scene file's JSON with the overrides applied, as text (what Scene::source_json holds), without
-// validating the scene: for tools that read a run's settings from its scene file and the --set it ran with.
-std::string scene_json_with_overrides(const std::string& file, const std::vector<Override>& overrides);
+// The scene file's text, bounded (common/input/json_input.h) before it is read: campaigns and calibrations
+// read it once and parse it per design point.
+std::string read_scene_file(const std::string& file);
 
 const char* to_string(BoundaryCondition c);
 const char* to_string(Precision p);

@@ -18,6 +18,7 @@
 #include "campaigns/run_folders.h"
 #include "common/command.h"
 #include "common/errors.h"
+#include "common/input/json_input.h"
 #include "common/plot/figure.h"
 #include "solver/scene.h"
 #include "store/h5/run_file.h"
@@ -109,13 +110,7 @@ TradeoffSpec parse_tradeoff_spec(const std::string& json_text, const std::string
   auto fail = [&](const std::string& field, const std::string& what) -> InputError {
     return InputError(file_label, field, what);
   };
-  json root;
-  try {
-    root = json::parse(json_text);
-  } catch (const json::parse_error& e) {
-    throw fail("", std::string("not valid JSON: ") + e.what());
-  }
-  if (!root.is_object()) throw fail("", "must be a JSON object");
+  const json root = input::parse_json_document(json_text, file_label);
   static const std::set<std::string> known = {"name",     "description", "scene",   "overrides",
                                               "settings", "reference",   "outputs", "run"};
   for (auto it = root.begin(); it != root.end(); ++it)
@@ -254,11 +249,8 @@ TradeoffSpec parse_tradeoff_spec(const std::string& json_text, const std::string
 }
 
 TradeoffSpec load_tradeoff_spec(const std::string& file) {
-  std::ifstream in(file);
-  if (!in) throw InputError(file, "", "cannot open the study spec");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return parse_tradeoff_spec(ss.str(), file, fs::path(file).parent_path().string());
+  return parse_tradeoff_spec(input::read_input_file(file, input::JsonLimits{}.max_bytes, "study spec"), file,
+                             fs::path(file).parent_path().string());
 }
 
 namespace {

@@ -116,8 +116,12 @@ std::string xml_escape(std::string_view s) {
 namespace {
 
 // Coordinates with two decimals (a hundredth of a pixel), locale-independent, trailing zeros dropped.
+// Pixel coordinates beyond this are off any canvas (and clipped): they are drawn at it instead.
+constexpr double kFarPx = 1e9;
+
 std::string num(double v) {
   if (std::abs(v) < 0.005) return "0";
+  v = std::clamp(v, -kFarPx, kFarPx);
   char buf[64];
   auto res = std::to_chars(buf, buf + sizeof buf, v, std::chars_format::fixed, 2);
   std::string s(buf, res.ptr);
@@ -177,13 +181,47 @@ std::string format_tick(double v, double step) {
 
 // ------------------------------------------------------------------------------------------------- ticks
 
+namespace {
+
+// Limits are clamped to +-kHugeLimit so that a range, a step and a tick one step beyond the data stay finite
+// doubles; data beyond it lie outside the axis (clipped).
+constexpr double kHugeLimit = 1e307;
+// A range below this many parts of its magnitude is constant up to rounding: tick labels (at most 15
+// significant digits) could not tell the ticks apart, and k += 1 stops changing k near 2^53.
+constexpr double kRelativeResolution = 1e-12;
+// A range below this is treated as zero width: its step 10^e would need e < -307, beyond normal doubles.
+constexpr double kTinyRange = 1e-290;
+
+void clamp_limits(double& lo, double& hi) {
+  if (hi < lo) std::swap(lo, hi);
+  lo = std::clamp(lo, -kHugeLimit, kHugeLimit);
+  hi = std::clamp(hi, -kHugeLimit, kHugeLimit);
+}
+
+bool degenerate_range(double lo, double hi) {
+  return hi - lo <= std::max(kTinyRange, kRelativeResolution * std::max(std::abs(lo), std::abs(hi)));
+}
+
+// Widens a degenerate [lo, hi] to +-10 % around its centre (+-1 around zero).
+void widen_degenerate(double& lo, double& hi) {
+  if (!degenerate_range(lo, hi)) return;
+  double c = lo + (hi - lo) / 2;
+  if (std::abs(c) < kTinyRange) c = 0;
+  double pad = c == 0 ? 1.0 : std::abs(c) * 0.1;
+  lo = c - pad;
+  hi = c + pad;
+}
+
+}  // namespace
+
 std::vector<double> nice_ticks(double lo, double hi, int target) {
   if (!finite(lo) || !finite(hi)) throw std::invalid_argument("plot: ticks need finite limits");
-  if (hi < lo) std::swap(lo, hi);
-  if (hi == lo) return {lo};
+  clamp_limits(lo, hi);
+  if (degenerate_range(lo, hi)) return {lo};
   TickStep step = step_for(hi - lo, target);
   double eps = step.value() * 1e-9;
   std::vector<double> ticks;
+  // At most target + 2 ticks: the step is at least (hi - lo) / target, and k stays far below 2^53.
   for (double k = std::ceil((lo - eps) / step.value()); step.at(k) <= hi + eps; k += 1)
     ticks.push_back(step.at(k) + 0.0);
   return ticks;
@@ -191,12 +229,8 @@ std::vector<double> nice_ticks(double lo, double hi, int target) {
 
 NiceAxis nice_axis(double lo, double hi, int target) {
   if (!finite(lo) || !finite(hi)) throw std::invalid_argument("plot: limits need finite data");
-  if (hi < lo) std::swap(lo, hi);
-  if (hi == lo) {
-    double pad = lo == 0 ? 1.0 : std::abs(lo) * 0.1;
-    lo -= pad;
-    hi += pad;
-  }
+  clamp_limits(lo, hi);
+  widen_degenerate(lo, hi);
   // The step is chosen for the data range and kept: recomputing it from the widened range could pick a
   // coarser one whose ticks no longer land on the limits.
   TickStep step = step_for(hi - lo, target);
@@ -484,16 +518,14 @@ Axes& Axes::histogram(const std::vector<double>& samples, int bins, const FillSt
     ++n;
   }
   if (n == 0) throw std::invalid_argument("plot: histogram of no finite samples");
-  if (hi == lo) {
-    lo -= 0.5;
-    hi += 0.5;
-  }
+  clamp_limits(lo, hi);
+  widen_degenerate(lo, hi);
   std::vector<double> edges(bins + 1), counts(bins, 0.0);
   double w = (hi - lo) / bins;
   for (int i = 0; i <= bins; ++i) edges[i] = lo + w * i;
   for (double v : samples) {
     if (!finite(v)) continue;
-    int b = std::min(bins - 1, static_cast<int>((v - lo) / w));
+    int b = static_cast<int>(std::clamp((v - lo) / w, 0.0, bins - 1.0));
     counts[b] += 1;
   }
   if (density)
@@ -537,8 +569,10 @@ Axes& Axes::heatmap(const std::vector<double>& x_edges, const std::vector<double
   hi = style.vmax.value_or(hi);
   if (!(hi > lo)) {
     if (style.vmin && style.vmax) throw std::invalid_argument("plot: heatmap needs vmin < vmax");
-    hi = lo + 1;
+    hi = lo;
   }
+  clamp_limits(lo, hi);
+  widen_degenerate(lo, hi);
   s_->artists.emplace_back(HeatmapArtist{x_edges, y_edges, values, style, lo, hi});
   return *this;
 }
@@ -769,8 +803,12 @@ void render_axes(const Axes::State& s, double cx, double cy, double cw, double c
     fill_ticks(yv, tick_target(ph, 50));
   }
 
-  auto X = [&](double v) { return px + (xv.t(v) - xv.lo) / (xv.hi - xv.lo) * pw; };
-  auto Y = [&](double v) { return py + ph - (yv.t(v) - yv.lo) / (yv.hi - yv.lo) * ph; };
+  // Pixel positions clamped so that a point far outside fixed limits (clipped anyway) stays finite: the
+  // difference of two such positions (a bar's width) is then a number, not inf - inf.
+  auto X = [&](double v) { return std::clamp(px + (xv.t(v) - xv.lo) / (xv.hi - xv.lo) * pw, -kFarPx, kFarPx); };
+  auto Y = [&](double v) {
+    return std::clamp(py + ph - (yv.t(v) - yv.lo) / (yv.hi - yv.lo) * ph, -kFarPx, kFarPx);
+  };
   auto ok = [&](double x, double y) {
     return finite(x) && finite(y) && (s.xscale == Scale::kLinear || x > 0) &&
            (s.yscale == Scale::kLinear || y > 0);

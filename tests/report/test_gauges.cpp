@@ -19,7 +19,7 @@
 #include "common/plot/figure.h"
 #include "tests/common/run_command.h"
 #include "report/gauges.h"
-#include "solver/run_output.h"
+#include "common/gauge_summary.h"
 #include "store/h5/run_file.h"
 
 

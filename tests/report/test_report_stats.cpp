@@ -148,4 +148,8 @@ TEST(Convergence, RunningMeanAndRunsNeeded) {
       EXPECT_LE(width(n), w);
       EXPECT_LE(n, static_cast<std::size_t>(std::ceil(std::pow(2 * 1.959963984540054 * sd / w, 2))) + 6);
     }
+  // A mean near zero against its spread (sd / width = 1e12, ~1.5e25 runs): bounded, not an overflowed cast
+  // followed by a loop from a garbage start (issue 29).
+  EXPECT_EQ(runs_for_width(1.0, 1e-12, 0.95), static_cast<std::size_t>(kMaxRunsNeeded));
+  EXPECT_EQ(runs_for_width(1e300, 1e-300, 0.95), static_cast<std::size_t>(kMaxRunsNeeded));
 }

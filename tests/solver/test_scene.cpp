@@ -281,3 +281,60 @@ TEST_F(SceneCli, OverridesReachTheRun) {
 
 }  // namespace
 }  // namespace flume
+
+namespace flume {
+namespace {
+
+// Issue 29: hostile documents, `--set` paths and resolutions, refused alike by `check` and `run` (one
+// validation function) with one line naming the file and the field, before anything is allocated.
+TEST_F(SceneCli, HostileDocuments) {
+  // 60,000 levels crashed `flume check` with SIGSEGV.
+  expect_rejected("deep.json", std::string(60000, '[') + std::string(60000, ']'), "", {"nested deeper than 64"});
+  expect_rejected("array.json", "[1, 2]", "", {"not an object"});
+  expect_rejected("null.json", "null", "", {"not an object"});
+  expect_rejected("overflow.json", replace(kValid, R"("dx": 0.02)", R"("dx": 1e999)"), "solver.dx",
+                  {"out of range"});
+  expect_file_rejected("/dev/zero", "", "", {"regular file"});
+  // A 10 MB name, refused by the file's size; a 100 kB one by the string bound.
+  expect_rejected("name10mb.json", replace(kValid, R"("name": "valid")", "\"name\": \"" + std::string(10 << 20, 'n') + "\""),
+                  "", {"at most 4194304"});
+  expect_rejected("name100kb.json", replace(kValid, R"("name": "valid")", "\"name\": \"" + std::string(100000, 'n') + "\""),
+                  "name", {"100000 bytes", "at most 4096"});
+  // 2,000 water boxes: under the document bounds, but the scene is stored whole in result.h5, which failed
+  // to write it after the whole run.
+  std::string boxes;
+  for (int i = 0; i < 2000; ++i) boxes += std::string(i ? ", " : "") + R"({"lo": [0.1, 0.1], "hi": [0.3, 0.3]})";
+  expect_rejected("boxes.json", replace(kValid, R"([{"lo": [0.1, 0.1], "hi": [0.3, 0.3]}])", "[" + boxes + "]"), "",
+                  {"at most 60000"});
+}
+
+TEST_F(SceneCli, HostileOverridePaths) {
+  const std::string file = write("valid.json", kValid);
+  for (const std::string path : {"..", ".solver.dx", "solver.dx.", "solver..dx"}) {
+    for (const std::string& cmd : std::vector<std::string>{"check ", "run --out " + (dir_ / "out").string() + " "}) {
+      SCOPED_TRACE(cmd + path);
+      const CliResult r = flume(cmd + file + " --set " + path + "=1");
+      EXPECT_EQ(r.rc, kExitInvalidInput) << r.err;
+      EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+      EXPECT_NE(r.err.find("--set: " + path + ": an empty segment"), std::string::npos) << r.err;
+    }
+  }
+  // 1e999 ended as "internal error: number overflow", naming no file or field.
+  expect_file_rejected(file, " --set solver.dx=1e999", "solver.dx", {"--set solver.dx", "out of range"});
+}
+
+TEST_F(SceneCli, ResolutionIsBoundedBeforeAllocating) {
+  const std::string file = write("valid.json", kValid);
+  // dx 1e-9 m passed `check`, and `run` allocated until memory ran out.
+  expect_file_rejected(file, " --set solver.dx=1e-9", "solver.dx", {"cells across the domain", "at most 4e+06"});
+  // 20 x 20 particles in the water box at dx 0.02 m, ppc 4; the bound is the scene's to raise.
+  expect_file_rejected(file, " --set solver.max_particles=100", "solver.dx",
+                       {"about 400 particles", "at most solver.max_particles = 100"});
+  EXPECT_EQ(parse_scene_text(kValid, "v.json", {{"solver.max_particles", "400"}}).solver.max_particles, 400);
+  // The Waseda basin at dx 1e9 m "completed" with 3 particles.
+  expect_file_rejected(std::string(FLUME_SOURCE_DIR) + "/scenes/waseda/waseda_2d.json", " --set solver.dx=1e9",
+                       "solver.dx", {"does not resolve water.0", "allowed: dx <="});
+}
+
+}  // namespace
+}  // namespace flume
