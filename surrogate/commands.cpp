@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -316,6 +317,12 @@ int show(const Args& a) {
 }  // namespace
 
 int surrogate_main(int argc, char** argv) {
+  for (int i = 1; i < argc; ++i) {
+    if (!std::strcmp(argv[i], "--help") || !std::strcmp(argv[i], "-h")) {
+      std::fputs(kUsage, stdout);
+      return kExitOk;
+    }
+  }
   return guarded_main("flume surrogate", kUsage, [&] {
     surrogate::detail::quiet_warnings();
     const Args a = parse_args(argc, argv);
