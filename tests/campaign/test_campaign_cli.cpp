@@ -20,6 +20,8 @@
 #include "tests/common/run_command.h"
 
 namespace {
+// Every error of `flume campaign run` starts with the command's name (the CLI's one error style).
+const std::string kCampaignRun = "flume campaign run: ";
 
 namespace fs = std::filesystem;
 
@@ -425,7 +427,7 @@ void two_writers_through_a_link(bool hard_link, int trials) {
     const int loser = rc[0] == 2 ? 0 : 1;
     const std::string err = read_file(dir / ("err" + std::to_string(loser)));
     EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
-    EXPECT_EQ(err.rfind(paths[loser].string() + ": another flume job (pid " + std::to_string(pid[1 - loser]) + ")", 0), 0u)
+    EXPECT_EQ(err.rfind(kCampaignRun + paths[loser].string() + ": another flume job (pid " + std::to_string(pid[1 - loser]) + ")", 0), 0u)
         << err;
     EXPECT_TRUE(read_file(dir / ("out" + std::to_string(loser))).empty());
     EXPECT_FALSE(fs::exists(paths[loser].string() + ".runs/" + name)) << "the refused job made its run folder";
@@ -463,7 +465,7 @@ TEST(CampaignSpecErrors, DotNamesAndUnwritableRunFolderAreRefusedBeforeRegisteri
     const Result r = run(flume_cmd({"campaign", "run", spec.string(), "--db", db.string()}), dir);
     EXPECT_EQ(r.rc, 2) << c.field << ": " << r.err;
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
-    EXPECT_EQ(r.err.rfind(spec.string() + ": " + c.field + ": ", 0), 0u) << r.err;
+    EXPECT_EQ(r.err.rfind(kCampaignRun + spec.string() + ": " + c.field + ": ", 0), 0u) << r.err;
     EXPECT_EQ(read_file(db), before) << c.field;
     EXPECT_EQ(scalar(db, "SELECT count(*) FROM campaigns"), "1");
     EXPECT_EQ(scalar(db, "SELECT count(*) FROM runs WHERE status = 'running'"), "0");
@@ -507,7 +509,7 @@ TEST(CampaignSpecErrors, ReadOnlyDatabaseIsRefusedNamingTheFile) {
     const Result r = run(flume_cmd({"campaign", "run", (specs / "b.json").string(), "--db", db.string()}), specs);
     set_read_only(locked, false);
     EXPECT_EQ(r.rc, 2) << locked << ": " << r.err;
-    EXPECT_EQ(r.err.rfind(db.string() + ": ", 0), 0u) << r.err;
+    EXPECT_EQ(r.err.rfind(kCampaignRun + db.string() + ": ", 0), 0u) << r.err;
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
     EXPECT_EQ(read_file(db), before);
     EXPECT_FALSE(fs::exists(db.string() + ".runs/b"));
