@@ -69,7 +69,7 @@ const std::vector<Case>& cases() {
        true},
       {"cfl_0.1", kWaseda, {{"solver.cfl", "0.1"}}, "a small step", true},
       {"cfl_1.0", kWaseda, {{"solver.cfl", "1.0"}}, "the explicit limit", false},
-      {"dx_0.25", kWaseda, {{"solver.dx", "0.25"}}, "the coarsest dx the scene allows (extent / 4)", false},
+      {"dx_0.16", kWaseda, {{"solver.dx", "0.16"}}, "the coarsest dx the scene allows (every water box at least half a spacing thick)", false},
       {"dx_0.02", kWaseda, {{"solver.dx", "0.02"}, {"solver.end_time", "0.5"}}, "a fine dx", true},
       // Debris (issue 4): paths as the coupling will name them.
       {"debris_friction_flume_0", kDebris, {{"solver.dx", "0.03"}, {"debris.friction.flume", "0"}}, "frictionless floor", false},
