@@ -109,7 +109,8 @@ const ObjectDoc& water_doc() {
            .in_unit("m")
            .at_most(1e6)
            .def_note("the box's top")
-           .note("at least the box's bottom")}};
+           .note("at least the box's bottom")
+           .eg(0.2)}};
   return d;
 }
 
@@ -208,13 +209,16 @@ const ObjectDoc& inflow_doc() {
       "inflow",
       "Water entering through the plane x = x_m, replaying the depth and velocity a section instrument of another "
       "run recorded (docs/waseda.md).",
-      {string("record", "the result.h5 holding the section's record, relative to the working directory").needed(),
+      {string("record", "the result.h5 holding the section's record, relative to the working directory")
+           .needed_when("to run (shipped apron scenes leave it to --set inflow.record=RUN/result.h5)")
+           .eg("RUN/result.h5"),
        string("section", "the section instrument's name in the record").def("apron_inflow"),
        number("buffer_cells", "the kinematic buffer upstream of the plane, in cells").in(2, 10).def(3.0),
        number("x_m", "the inflow plane").def(4.35).in_unit("m").note(
            "in [domain.lo + (buffer_cells + 2) dx, domain.hi - 2 dx]; upstream of the quay in an apron region"),
        vector("y_m", 2, 2, "[lo, hi], the lateral extent of the water at the plane")
            .in_unit("m")
+           .eg(json::array({0.0, 4.0}))
            .needed_when("in 3D (a basin's apron region sets it)")}};
   return d;
 }

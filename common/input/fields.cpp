@@ -82,20 +82,28 @@ bool has_range(const Field& f) { return std::isfinite(f.lo) || std::isfinite(f.h
 std::string description(const Field& f) {
   std::string d = f.meaning;
   if (!f.unit.empty()) d += " [" + f.unit + "]";
-  if (!f.range_note.empty()) d += " Allowed: " + f.range_note + ".";
-  if (!f.default_note.empty()) d += " Default: " + f.default_note + ".";
-  if (!f.required_when.empty()) d += " Required " + f.required_when + ".";
+  if (!f.range_note.empty()) d += "; allowed: " + f.range_note;
+  if (!f.default_note.empty()) d += "; default: " + f.default_note;
+  if (!f.required_when.empty()) d += "; required " + f.required_when;
   return d;
 }
 
-json object_schema(const ObjectDoc& doc);
+using ojson = nlohmann::ordered_json;
 
-json field_schema(const Field& f) {
-  json s;
+ojson object_schema(const ObjectDoc& doc);
+ojson ordered(const json& j) { return ojson::parse(j.dump()); }
+
+ojson field_schema(const Field& f) {
+  ojson s;
   switch (f.type) {
     case FieldType::kNumber:
     case FieldType::kInteger:
       s["type"] = f.type == FieldType::kNumber ? "number" : "integer";
+      if (f.type == FieldType::kInteger) {
+        if (std::isfinite(f.lo)) s["minimum"] = static_cast<long long>(f.lo);
+        if (std::isfinite(f.hi)) s["maximum"] = static_cast<long long>(f.hi);
+        break;
+      }
       if (std::isfinite(f.lo)) s[f.lo_open ? "exclusiveMinimum" : "minimum"] = f.lo;
       if (std::isfinite(f.hi)) s[f.hi_open ? "exclusiveMaximum" : "maximum"] = f.hi;
       break;
@@ -110,19 +118,19 @@ json field_schema(const Field& f) {
       break;
     case FieldType::kObject: s = object_schema(*f.object); break;
     case FieldType::kObjectArray: s = {{"type", "array"}, {"items", object_schema(*f.object)}}; break;
-    case FieldType::kMap: s = {{"type", "object"}, {"additionalProperties", f.value_schema}}; break;
-    case FieldType::kValue: s = f.value_schema; break;
+    case FieldType::kMap: s = {{"type", "object"}, {"additionalProperties", ordered(f.value_schema)}}; break;
+    case FieldType::kValue: s = ordered(f.value_schema); break;
   }
-  if (!f.default_value.is_null()) s["default"] = f.default_value;
+  if (!f.default_value.is_null()) s["default"] = ordered(f.default_value);
   s["description"] = description(f);
   if (!f.unit.empty()) s["x-unit"] = f.unit;
   return s;
 }
 
-json object_schema(const ObjectDoc& doc) {
-  json s = {{"type", "object"}, {"description", doc.meaning}, {"properties", json::object()},
-            {"additionalProperties", false}};
-  json required = json::array();
+ojson object_schema(const ObjectDoc& doc) {
+  ojson s = {{"type", "object"}, {"description", doc.meaning}, {"properties", ojson::object()},
+             {"additionalProperties", false}};
+  ojson required = ojson::array();
   for (const auto& f : doc.fields) {
     s["properties"][f.key] = field_schema(f);
     if (f.required) required.push_back(f.key);
@@ -205,10 +213,10 @@ void collect(const ObjectDoc& doc, const std::string& path, std::vector<FieldAt>
 
 }  // namespace
 
-json json_schema(const ObjectDoc& root, const std::string& id, const std::string& title) {
-  json s = object_schema(root);
-  json out = {{"$schema", "https://json-schema.org/draft/2020-12/schema"}, {"$id", id}, {"title", title}};
-  out.update(s);
+nlohmann::ordered_json json_schema(const ObjectDoc& root, const std::string& id, const std::string& title) {
+  ojson out = {{"$schema", "https://json-schema.org/draft/2020-12/schema"}, {"$id", id}, {"title", title}};
+  const ojson body = object_schema(root);
+  for (auto it = body.begin(); it != body.end(); ++it) out[it.key()] = *it;
   return out;
 }
 
@@ -219,7 +227,10 @@ std::string markdown_reference(const ObjectDoc& root, const std::string& title, 
                     "\n";
   // Breadth-first, so that each section follows the one that names it.
   std::vector<std::pair<const ObjectDoc*, std::string>> queue = {{&root, ""}};
-  for (size_t i = 0; i < queue.size(); ++i) markdown_object(*queue[i].first, queue[i].second, out, queue);
+  for (size_t i = 0; i < queue.size(); ++i) {
+    const auto [doc, path] = queue[i];  // a copy: markdown_object appends to the queue
+    markdown_object(*doc, path, out, queue);
+  }
   return out;
 }
 

@@ -85,7 +85,7 @@ std::string range_text(double lo, double hi, bool lo_open, bool hi_open);
 std::string number_text(double v);
 
 // The JSON Schema (draft 2020-12) of a document whose top-level object is `root`.
-nlohmann::json json_schema(const ObjectDoc& root, const std::string& id, const std::string& title);
+nlohmann::ordered_json json_schema(const ObjectDoc& root, const std::string& id, const std::string& title);
 // The Markdown reference: `intro` (a paragraph), then a section and a table per object.
 std::string markdown_reference(const ObjectDoc& root, const std::string& title, const std::string& intro,
                                const std::string& command);

@@ -1,0 +1,140 @@
+// The field descriptions (common/input/fields.h) against the parsers that read with them: every described field
+// is accepted by its parser, the parser cannot read a field its description lacks, and the references in docs/
+// are what `flume schema KIND --markdown` generates now (so they cannot drift from the code).
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <stdexcept>
+
+#include "cli/schema.h"
+#include "common/errors.h"
+#include "common/input/field_reader.h"
+#include "solver/scene.h"
+#include "solver/scene_fields.h"
+
+namespace flume {
+namespace {
+
+using json = nlohmann::json;
+const std::string kSource = FLUME_SOURCE_DIR;
+
+std::string slurp(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+TEST(FieldReader, ReadingAnUndescribedFieldIsAProgrammingError) {
+  const input::ObjectDoc doc{"t", "", {input::number("x", "a number").in(0, 1).def(0.5)}};
+  const json j = {{"x", 0.25}};
+  input::FieldReader r(j, doc, "", "f.json");
+  EXPECT_EQ(r.number("x"), 0.25);
+  EXPECT_THROW(r.number("y"), std::logic_error);
+  EXPECT_THROW(r.accept("y"), std::logic_error);
+  EXPECT_THROW(r.string("x"), std::logic_error);  // read as another type than described
+}
+
+TEST(FieldReader, MessagesNameFileFieldAndAllowedRange) {
+  const input::ObjectDoc doc{"t", "", {input::number("x", "a number").above(0).at_most(1).needed(),
+                                       input::choice("c", {"a", "b"}, "a choice").def("a")}};
+  auto message = [&](const json& j, auto read) {
+    try {
+      input::FieldReader r(j, doc, "sec", "f.json");
+      read(r);
+      r.finish();
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_EQ(message(json::object(), [](auto& r) { r.number("x"); }),
+            "f.json: sec.x: is required (a number in (0, 1])");
+  EXPECT_EQ(message(json{{"x", 2}}, [](auto& r) { r.number("x"); }), "f.json: sec.x: must be in (0, 1] (got 2)");
+  EXPECT_EQ(message(json{{"x", "2"}}, [](auto& r) { r.number("x"); }),
+            "f.json: sec.x: must be a number in (0, 1], got a string");
+  EXPECT_EQ(message(json{{"x", 1}, {"c", "z"}}, [](auto& r) { r.number("x"), r.choice("c"); }),
+            "f.json: sec.c: must be one of a|b (got 'z')");
+  EXPECT_EQ(message(json{{"x", 1}, {"cc", "a"}}, [](auto& r) { r.number("x"), r.choice("c"); }),
+            "f.json: sec.cc: unknown field (known here: c, x)");
+}
+
+// Values the description allows, for a field the base documents lack.
+std::vector<json> valid_values(const input::Field& f) {
+  std::vector<json> out;
+  if (!f.example.is_null()) out.push_back(f.example);
+  if (!f.default_value.is_null()) out.push_back(f.default_value);
+  if (f.type == input::FieldType::kChoice) out.push_back(f.choices.front());
+  if (f.type == input::FieldType::kObject) out.push_back(json::object());
+  if (f.type == input::FieldType::kVector)
+    for (int n = f.min_items; n <= f.max_items; ++n) out.push_back(std::vector<double>(static_cast<size_t>(n), 0.0));
+  return out;
+}
+
+// Every field the scene's description lists is accepted by the scene parser: in a shipped scene that has it,
+// or set (to its default or example) in one whose enclosing object exists. A field described but never read
+// fails here as "unknown field"; a field read but not described cannot be accepted (the logic_error above).
+TEST(SceneSchema, EveryDescribedFieldIsAcceptedByTheParser) {
+  std::vector<std::string> bases;
+  for (const char* f : {"scenes/debris/bore_container.json", "scenes/dam_break/martin_moyce_2d.json",
+                        "scenes/waseda/waseda_2d.json", "scenes/waseda/waseda_3d.json", "scenes/waseda/waseda_3d_half.json",
+                        "scenes/waseda/waseda_apron.json", "scenes/debris/grounding_sheet.json",
+                        "tests/schema/box_boundary_2d.json", "tests/schema/basin_debris_3d.json"})
+    bases.push_back(slurp(kSource + "/" + f));
+  std::vector<std::string> refused;
+  for (const auto& [path, field] : input::all_fields(scene_doc())) {
+    const json::json_pointer ptr("/" + [&] {
+      std::string p = path;
+      for (auto& c : p) c = c == '.' ? '/' : c;
+      return p;
+    }());
+    std::string last = "no base scene has its enclosing object";
+    bool accepted = false;
+    for (const auto& text : bases) {
+      const json base = json::parse(text);
+      // An enclosing object that is absent is created empty, where its own parent exists.
+      const bool parent = base.contains(ptr.parent_pointer()) ||
+                          (!ptr.parent_pointer().empty() && base.contains(ptr.parent_pointer().parent_pointer()) &&
+                           !std::isdigit(static_cast<unsigned char>(ptr.parent_pointer().back()[0])));
+      if (!base.contains(ptr) && !parent) continue;
+      std::vector<json> values = {json()};  // null: the base's own value
+      if (!base.contains(ptr)) values = valid_values(*field);
+      for (const json& v : values) {
+        json doc = base;
+        // An inflow record is given at run time (--set inflow.record=RUN/result.h5): named here, so that the
+        // only error the apron scene may raise is that the record cannot be read, after every field was checked.
+        if (doc.contains("inflow") && !doc["inflow"].contains("record")) doc["inflow"]["record"] = "RUN/result.h5";
+        if (!v.is_null()) doc[ptr] = v;
+        try {
+          parse_scene_text(doc.dump(), "base.json");
+          accepted = true;
+        } catch (const InputError& e) {
+          accepted = doc.contains("inflow") && e.field() == "inflow.record" &&
+                     e.problem().find("unknown field") == std::string::npos;
+          if (!accepted) last = e.what();
+        }
+        if (accepted) break;
+      }
+      if (accepted) break;
+    }
+    if (!accepted) refused.push_back(path + " (" + last + ")");
+  }
+  std::string list;
+  for (const auto& r : refused) list += "\n  " + r;
+  EXPECT_TRUE(refused.empty()) << "described but refused by the scene parser:" << list;
+}
+
+// docs/scene.md (and each spec's reference) is what `flume schema KIND --markdown` prints now; regenerate with
+// scripts/schema-docs after changing a description.
+TEST(SchemaDocs, ReferencesInDocsAreGeneratedFromTheDescriptions) {
+  for (const auto& kind : cli::document_kinds()) {
+    const std::string file = kSource + "/" + kind.reference;
+    EXPECT_EQ(slurp(file), cli::markdown_text(kind))
+        << file << " differs from `flume schema " << kind.name << " --markdown`: run scripts/schema-docs";
+  }
+}
+
+}  // namespace
+}  // namespace flume
