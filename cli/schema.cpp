@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "common/command.h"
+#include "campaigns/spec_fields.h"
 #include "solver/scene_fields.h"
 
 namespace flume::cli {
@@ -20,6 +21,14 @@ const std::vector<DocumentKind>& document_kinds() {
        "column are static; where a bound follows from other fields it says so. `flume schema scene` prints the "
        "same as a JSON Schema (draft 2020-12).",
        "docs/scene.md"},
+      {"campaign", campaigns::campaign_doc, "Campaign spec reference",
+       "A campaign spec is one JSON object: sampled runs of a scene or an analytic model, kept in an SQLite "
+       "database (`flume campaign run SPEC --db FILE`, docs/campaigns.md). Every field below is checked before the "
+       "database is touched; a bad value is reported as one line naming the file, the field and the allowed "
+       "range, and an unknown field is refused. Parameter paths and overrides are scene fields (docs/scene.md), "
+       "checked against the scene at every design point. `flume schema campaign` prints the same as a JSON "
+       "Schema (draft 2020-12).",
+       "docs/campaign-spec.md"},
   };
   return kinds;
 }

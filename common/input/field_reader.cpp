@@ -50,7 +50,7 @@ const json& FieldReader::raw(const std::string& key) {
 }
 
 void FieldReader::accept(const std::string& key) {
-  described(key);
+  if (!doc_.free_keys) described(key);
   used_.insert(key);
 }
 
@@ -201,6 +201,15 @@ const json& FieldReader::array(const std::string& key) {
   if (!has(key)) return empty;
   const json& v = raw(key);
   if (!v.is_array()) fail(key, std::string("must be an array, got ") + type_name(v));
+  return v;
+}
+
+const json& FieldReader::map(const std::string& key) {
+  static const json empty = json::object();
+  field(key, FieldType::kMap);
+  if (!has(key)) return empty;
+  const json& v = raw(key);
+  if (!v.is_object()) fail(key, std::string("must be an object, got ") + type_name(v));
   return v;
 }
 

@@ -60,6 +60,7 @@ class FieldReader {
   FieldReader object(const std::string& key);               // absent: an empty object
   std::vector<FieldReader> objects(const std::string& key);  // an array of objects; absent: none
   const nlohmann::json& array(const std::string& key);       // any array, checked by the caller; absent: []
+  const nlohmann::json& map(const std::string& key);         // an object with free keys; absent: {}
 
   void finish() const;
 

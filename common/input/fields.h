@@ -65,6 +65,7 @@ struct ObjectDoc {
   std::string title;    // "solver", "boundaries[]"
   std::string meaning;  // a sentence or two
   std::vector<Field> fields;
+  bool free_keys = false;  // other keys are allowed too (a list design's point: scene paths), read with accept()
   const Field* find(const std::string& key) const;
 };
 

@@ -3,7 +3,9 @@
 // are what `flume schema KIND --markdown` generates now (so they cannot drift from the code).
 #include <gtest/gtest.h>
 
+#include <cctype>
 #include <fstream>
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <stdexcept>
@@ -11,6 +13,8 @@
 #include "cli/schema.h"
 #include "common/errors.h"
 #include "common/input/field_reader.h"
+#include "campaigns/spec.h"
+#include "campaigns/spec_fields.h"
 #include "solver/scene.h"
 #include "solver/scene_fields.h"
 
@@ -73,28 +77,20 @@ std::vector<json> valid_values(const input::Field& f) {
   return out;
 }
 
-// Every field the scene's description lists is accepted by the scene parser: in a shipped scene that has it,
-// or set (to its default or example) in one whose enclosing object exists. A field described but never read
-// fails here as "unknown field"; a field read but not described cannot be accepted (the logic_error above).
-TEST(SceneSchema, EveryDescribedFieldIsAcceptedByTheParser) {
-  std::vector<std::string> bases;
-  for (const char* f : {"scenes/debris/bore_container.json", "scenes/dam_break/martin_moyce_2d.json",
-                        "scenes/waseda/waseda_2d.json", "scenes/waseda/waseda_3d.json", "scenes/waseda/waseda_3d_half.json",
-                        "scenes/waseda/waseda_apron.json", "scenes/debris/grounding_sheet.json",
-                        "tests/schema/box_boundary_2d.json", "tests/schema/basin_debris_3d.json"})
-    bases.push_back(slurp(kSource + "/" + f));
+// Every field `doc` lists is accepted by its parser: in a base document that has it, or set (to its example,
+// default, first choice, an empty object, zeros) in one whose enclosing object exists or can be created. A
+// field described but never read fails as "unknown field"; a field read but not described cannot be accepted
+// (the logic_error above). `accepts` parses a document and says why not.
+void expect_every_field_accepted(const input::ObjectDoc& doc, const std::vector<json>& bases,
+                                 const std::function<std::string(const json&)>& refusal) {
   std::vector<std::string> refused;
-  for (const auto& [path, field] : input::all_fields(scene_doc())) {
-    const json::json_pointer ptr("/" + [&] {
-      std::string p = path;
-      for (auto& c : p) c = c == '.' ? '/' : c;
-      return p;
-    }());
-    std::string last = "no base scene has its enclosing object";
+  for (const auto& [path, field] : input::all_fields(doc)) {
+    std::string pointer = "/" + path;
+    for (auto& c : pointer) c = c == '.' ? '/' : c;
+    const json::json_pointer ptr(pointer);
+    std::string last = "no base document has its enclosing object";
     bool accepted = false;
-    for (const auto& text : bases) {
-      const json base = json::parse(text);
-      // An enclosing object that is absent is created empty, where its own parent exists.
+    for (const json& base : bases) {
       const bool parent = base.contains(ptr.parent_pointer()) ||
                           (!ptr.parent_pointer().empty() && base.contains(ptr.parent_pointer().parent_pointer()) &&
                            !std::isdigit(static_cast<unsigned char>(ptr.parent_pointer().back()[0])));
@@ -102,19 +98,11 @@ TEST(SceneSchema, EveryDescribedFieldIsAcceptedByTheParser) {
       std::vector<json> values = {json()};  // null: the base's own value
       if (!base.contains(ptr)) values = valid_values(*field);
       for (const json& v : values) {
-        json doc = base;
-        // An inflow record is given at run time (--set inflow.record=RUN/result.h5): named here, so that the
-        // only error the apron scene may raise is that the record cannot be read, after every field was checked.
-        if (doc.contains("inflow") && !doc["inflow"].contains("record")) doc["inflow"]["record"] = "RUN/result.h5";
-        if (!v.is_null()) doc[ptr] = v;
-        try {
-          parse_scene_text(doc.dump(), "base.json");
-          accepted = true;
-        } catch (const InputError& e) {
-          accepted = doc.contains("inflow") && e.field() == "inflow.record" &&
-                     e.problem().find("unknown field") == std::string::npos;
-          if (!accepted) last = e.what();
-        }
+        json d = base;
+        if (!v.is_null()) d[ptr] = v;
+        const std::string why = refusal(d);
+        accepted = why.empty();
+        if (!accepted) last = why;
         if (accepted) break;
       }
       if (accepted) break;
@@ -123,7 +111,65 @@ TEST(SceneSchema, EveryDescribedFieldIsAcceptedByTheParser) {
   }
   std::string list;
   for (const auto& r : refused) list += "\n  " + r;
-  EXPECT_TRUE(refused.empty()) << "described but refused by the scene parser:" << list;
+  EXPECT_TRUE(refused.empty()) << "described but refused by the " << doc.title << " parser:" << list;
+}
+
+TEST(SceneSchema, EveryDescribedFieldIsAcceptedByTheParser) {
+  std::vector<json> bases;
+  for (const char* f : {"scenes/debris/bore_container.json", "scenes/dam_break/martin_moyce_2d.json",
+                        "scenes/waseda/waseda_2d.json", "scenes/waseda/waseda_3d.json", "scenes/waseda/waseda_3d_half.json",
+                        "scenes/waseda/waseda_apron.json", "scenes/debris/grounding_sheet.json",
+                        "tests/schema/box_boundary_2d.json", "tests/schema/basin_debris_3d.json"})
+    bases.push_back(json::parse(slurp(kSource + "/" + f)));
+  expect_every_field_accepted(scene_doc(), bases, [](json d) -> std::string {
+    // An inflow record is given at run time (--set inflow.record=RUN/result.h5): named here, so that the only
+    // error the apron scene may raise is that the record cannot be read, after every field was checked.
+    if (d.contains("inflow") && !d["inflow"].contains("record")) d["inflow"]["record"] = "RUN/result.h5";
+    try {
+      parse_scene_text(d.dump(), "base.json");
+    } catch (const InputError& e) {
+      const bool record_only = d.contains("inflow") && e.field() == "inflow.record" &&
+                               e.problem().find("unknown field") == std::string::npos;
+      return record_only ? "" : e.what();
+    }
+    return "";
+  });
+}
+
+TEST(CampaignSchema, EveryDescribedFieldIsAcceptedByTheParser) {
+  const std::string u = R"({"type": "uniform", "lower": 0, "upper": 1})";
+  std::vector<json> bases;
+  for (const std::string& text : std::vector<std::string>{
+           // each distribution type as parameters.0, each design type, correlation, run, overrides
+           R"({"name": "a", "description": "d", "model": "ishigami", "overrides": {"x3": 0.5},
+               "parameters": [{"path": "x1", "distribution": )" + u + R"(},
+                              {"path": "x2", "distribution": {"type": "normal", "mean": 0, "std": 1}}],
+               "correlation": [{"parameters": ["x1", "x2"], "rank": 0.3}],
+               "design": {"type": "lhs", "samples": 4}, "seed": 1,
+               "run": {"time_limit_s": 60, "threads": 1, "memory_limit_mb": 0, "output_dir": "", "checkpoint_every_s": 0}})",
+           R"({"name": "b", "model": "ishigami", "parameters": [{"path": "x1", "distribution": {"type": "normal", "mean": 0, "std": 1}}],
+               "design": {"type": "saltelli", "samples": 2, "base": "sobol"}, "seed": 1})",
+           R"({"name": "c", "model": "ishigami", "parameters": [{"path": "x1", "distribution": {"type": "lognormal", "mu_log": 0, "sigma_log": 0.5}}],
+               "design": {"type": "grid", "levels": 2}, "seed": 1})",
+           R"({"name": "d", "model": "ishigami", "parameters": [{"path": "x1", "distribution": {"type": "beta", "alpha": 2, "beta": 2, "lower": 0, "upper": 1}}],
+               "design": {"type": "one_at_a_time"}, "seed": 1})",
+           R"({"name": "e", "model": "ishigami", "parameters": [{"path": "x1", "distribution": {"type": "choice", "values": [1, 2], "weights": [1, 1]}}],
+               "design": {"type": "monte_carlo", "samples": 2}, "seed": 1})",
+           R"({"name": "f", "model": "ishigami", "parameters": [{"path": "x1", "distribution": {"type": "truncated_normal", "mean": 0, "std": 1, "lower": -1, "upper": 1}}],
+               "design": {"type": "sobol", "samples": 2}, "seed": 1})",
+           R"({"name": "g", "model": "ishigami", "design": {"type": "list", "points": [{"label": "p", "x1": 1}, {"label": "q", "x1": 2}]}})",
+           R"({"name": "h", "scene": "tests/schema/box_boundary_2d.json",
+               "parameters": [{"path": "solver.cfl", "distribution": {"type": "uniform", "lower": 0.3, "upper": 0.4}}],
+               "design": {"type": "monte_carlo", "samples": 2}, "seed": 1})"})
+    bases.push_back(json::parse(text));
+  expect_every_field_accepted(campaigns::campaign_doc(), bases, [](const json& d) -> std::string {
+    try {
+      campaigns::parse_campaign_spec(d.dump(), "spec.json", kSource);
+    } catch (const InputError& e) {
+      return e.what();
+    }
+    return "";
+  });
 }
 
 // docs/scene.md (and each spec's reference) is what `flume schema KIND --markdown` prints now; regenerate with
