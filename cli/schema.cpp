@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "common/command.h"
+#include "calibration/spec_fields.h"
 #include "campaigns/spec_fields.h"
 #include "solver/scene_fields.h"
 
@@ -29,6 +30,14 @@ const std::vector<DocumentKind>& document_kinds() {
        "checked against the scene at every design point. `flume schema campaign` prints the same as a JSON "
        "Schema (draft 2020-12).",
        "docs/campaign-spec.md"},
+      {"calibration", calibration::calibration_doc, "Calibration spec reference",
+       "A calibration spec is one JSON object: scene parameters fitted by NLopt to measured gauge records "
+       "(`flume calibrate SPEC --db FILE --out DIR`, docs/calibration.md). Every field below is checked before "
+       "anything runs; a bad value is reported as one line naming the file, the field and the allowed range, and "
+       "an unknown field is refused. Parameter paths and overrides are scene fields (docs/scene.md), checked "
+       "against the scene at each parameter's bounds and start. `flume schema calibration` prints the same as a "
+       "JSON Schema (draft 2020-12).",
+       "docs/calibration-spec.md"},
   };
   return kinds;
 }

@@ -87,7 +87,7 @@ long long FieldReader::integer_or(const std::string& key, long long def,
                                   std::optional<std::pair<long long, long long>> b) {
   const Field& f = field(key, FieldType::kInteger);
   const double lo = b ? static_cast<double>(b->first) : f.lo, hi = b ? static_cast<double>(b->second) : f.hi;
-  const std::string range = "[" + number_text(lo) + ", " + number_text(hi) + "]";
+  const std::string range = integer_range_text(lo, hi);
   if (!has(key)) return def;
   const json& v = raw(key);
   if (!v.is_number() || std::floor(v.get<double>()) != v.get<double>())
@@ -102,7 +102,7 @@ long long FieldReader::integer(const std::string& key, std::optional<std::pair<l
   const Field& f = field(key, FieldType::kInteger);
   if (!has(key)) {
     const double lo = b ? static_cast<double>(b->first) : f.lo, hi = b ? static_cast<double>(b->second) : f.hi;
-    if (!f.default_value.is_number()) missing(f, "an integer in [" + number_text(lo) + ", " + number_text(hi) + "]");
+    if (!f.default_value.is_number()) missing(f, "an integer in " + integer_range_text(lo, hi));
     return f.default_value.get<long long>();
   }
   return integer_or(key, 0, b);

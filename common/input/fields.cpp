@@ -69,6 +69,11 @@ std::string number_text(double v) {
   return s.str();
 }
 
+std::string integer_range_text(double lo, double hi) {
+  auto text = [](double v) { return std::isfinite(v) ? std::to_string(static_cast<long long>(v)) : number_text(v); };
+  return "[" + text(lo) + ", " + text(hi) + "]";
+}
+
 std::string range_text(double lo, double hi, bool lo_open, bool hi_open) {
   const std::string l = std::isinf(lo) ? "(-inf" : std::string(lo_open ? "(" : "[") + number_text(lo);
   const std::string h = std::isinf(hi) ? "inf)" : number_text(hi) + (hi_open ? ")" : "]");
@@ -173,8 +178,8 @@ std::string type_text(const Field& f, const std::string& child_path) {
 
 std::string allowed_text(const Field& f) {
   std::string s;
-  if ((f.type == FieldType::kNumber || f.type == FieldType::kInteger) && has_range(f))
-    s = range_text(f.lo, f.hi, f.lo_open, f.hi_open);
+  if (f.type == FieldType::kNumber && has_range(f)) s = range_text(f.lo, f.hi, f.lo_open, f.hi_open);
+  if (f.type == FieldType::kInteger && has_range(f)) s = integer_range_text(f.lo, f.hi);
   if (!f.range_note.empty()) s += (s.empty() ? "" : "; ") + f.range_note;
   return cell(s);
 }

@@ -82,6 +82,8 @@ Field value(std::string key, nlohmann::json schema, std::string type_text, std::
 
 // "[0, 1]", "(0, inf)": a field's static range as messages and the reference write it.
 std::string range_text(double lo, double hi, bool lo_open, bool hi_open);
+// "[1, 1000000]": an integer field's range, written out in full.
+std::string integer_range_text(double lo, double hi);
 // A number as messages print it (shortest round-trip-ish form, "0.1", "1e+06").
 std::string number_text(double v);
 

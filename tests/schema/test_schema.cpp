@@ -3,7 +3,10 @@
 // are what `flume schema KIND --markdown` generates now (so they cannot drift from the code).
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <cctype>
+#include <filesystem>
 #include <fstream>
 #include <functional>
 #include <nlohmann/json.hpp>
@@ -13,6 +16,8 @@
 #include "cli/schema.h"
 #include "common/errors.h"
 #include "common/input/field_reader.h"
+#include "calibration/spec.h"
+#include "calibration/spec_fields.h"
 #include "campaigns/spec.h"
 #include "campaigns/spec_fields.h"
 #include "solver/scene.h"
@@ -170,6 +175,43 @@ TEST(CampaignSchema, EveryDescribedFieldIsAcceptedByTheParser) {
     }
     return "";
   });
+}
+
+TEST(CalibrationSchema, EveryDescribedFieldIsAcceptedByTheParser) {
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("flume_test_schema_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir / "wg1.csv") << "time_s,WG1\n0,0\n1,0.05\n2,0\n";
+  std::ofstream(dir / "g1.csv") << "time_s,G1\n0,0\n0.05,0\n0.1,0\n";
+  const std::string params = R"([{"path": "reservoir.forcing.t99_s", "scale": "linear", "lower": 0.05, "upper": 2, "start": 0.2},
+                                  {"path": "reservoir.gate_height_m", "lower": 0.04, "upper": 0.16, "start": 0.12}])";
+  std::vector<json> bases;
+  for (const std::string& text : std::vector<std::string>{
+           R"({"name": "a", "description": "d", "model": "gauge", "overrides": {}, "parameters": )" + params + R"(,
+               "objective": {"window": [0, 2], "peak_weight": 1, "arrival_weight_m_per_s": 1, "arrival_threshold_m": 0.005,
+                             "time_shift": {"lower": -0.1, "upper": 0.1, "start": 0}},
+               "algorithm": {"name": "MLSL", "local": "SBPLX", "polish": "BOBYQA", "max_evaluations": 5,
+                             "polish_evaluations": 5, "max_time_s": 0, "xtol_abs": 1e-4, "ftol_abs": 0,
+                             "initial_step": 0.1, "population": 0, "seed": 1},
+               "starts": [{"reservoir.forcing.t99_s": 0.3}], "multi_start": {"random": 1, "seed": 1},
+               "profile": {"points": 2, "span": 0.1}, "run": {"time_limit_s": 60, "threads": 1, "output_dir": ""},
+               "targets": [{"file": "wg1.csv", "weight": 1, "gauge": "WG1"}]})",
+           R"({"name": "b", "model": "gauge", "parameters": )" + params + R"(, "objective": {"window": [0, 2]},
+               "algorithm": {"name": "SBPLX", "max_evaluations": 5}, "targets": [{"file": "wg1.csv", "gauges": {"WG1": "WG1"}}]})",
+           R"({"name": "c", "scene": ")" + kSource + R"(/tests/schema/box_boundary_2d.json",
+               "parameters": [{"path": "solver.cfl", "scale": "log", "lower": 0.3, "upper": 0.5, "start": 0.4}],
+               "objective": {"window": [0, 0.1]}, "algorithm": {"name": "SBPLX", "max_evaluations": 5},
+               "targets": [{"file": "g1.csv"}]})"})
+    bases.push_back(json::parse(text));
+  expect_every_field_accepted(calibration::calibration_doc(), bases, [&](const json& d) -> std::string {
+    try {
+      calibration::parse_calibration_spec(d.dump(), "spec.json", dir.string());
+    } catch (const InputError& e) {
+      return e.what();
+    }
+    return "";
+  });
+  std::filesystem::remove_all(dir);
 }
 
 // docs/scene.md (and each spec's reference) is what `flume schema KIND --markdown` prints now; regenerate with
