@@ -8,6 +8,7 @@
 #include "calibration/spec_fields.h"
 #include "campaigns/spec_fields.h"
 #include "solver/scene_fields.h"
+#include "study/spec_fields.h"
 
 namespace flume::cli {
 
@@ -38,6 +39,14 @@ const std::vector<DocumentKind>& document_kinds() {
        "against the scene at each parameter's bounds and start. `flume schema calibration` prints the same as a "
        "JSON Schema (draft 2020-12).",
        "docs/calibration-spec.md"},
+      {"study", study::study_doc, "Study spec reference",
+       "A study spec is one JSON object: fidelity settings of one scene (dx, ppc, precision, variant scenes, ...) "
+       "run as a campaign with a list design, each compared with a reference (`flume study tradeoff SPEC --db "
+       "FILE`, docs/tradeoff.md). Every field below is checked before anything runs; a bad value is reported as "
+       "one line naming the file, the field and the allowed range, and an unknown field is refused. A setting's "
+       "paths are scene fields (docs/scene.md), checked against the scene. `flume schema study` prints the same as "
+       "a JSON Schema (draft 2020-12).",
+       "docs/study-spec.md"},
   };
   return kinds;
 }

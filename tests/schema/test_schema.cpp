@@ -22,6 +22,8 @@
 #include "campaigns/spec_fields.h"
 #include "solver/scene.h"
 #include "solver/scene_fields.h"
+#include "study/spec_fields.h"
+#include "study/tradeoff.h"
 
 namespace flume {
 namespace {
@@ -212,6 +214,21 @@ TEST(CalibrationSchema, EveryDescribedFieldIsAcceptedByTheParser) {
     return "";
   });
   std::filesystem::remove_all(dir);
+}
+
+TEST(StudySchema, EveryDescribedFieldIsAcceptedByTheParser) {
+  std::vector<json> bases;
+  for (const auto& entry : std::filesystem::directory_iterator(kSource + "/scenes/studies"))
+    if (entry.path().extension() == ".json") bases.push_back(json::parse(slurp(entry.path().string())));
+  ASSERT_FALSE(bases.empty());
+  expect_every_field_accepted(study::study_doc(), bases, [](const json& d) -> std::string {
+    try {
+      study::parse_tradeoff_spec(d.dump(), "spec.json", kSource + "/scenes/studies");
+    } catch (const InputError& e) {
+      return e.what();
+    }
+    return "";
+  });
 }
 
 // docs/scene.md (and each spec's reference) is what `flume schema KIND --markdown` prints now; regenerate with
