@@ -37,8 +37,9 @@ constexpr std::size_t kMaxSceneJsonBytes = 60000;
 
 // What the solver allocates from a scene, bounded before it is (docs/reliability.md, "Input limits"): the
 // particles its water boxes seed and the cells across its domain.
-constexpr int kDefaultMaxParticles = 100000000;   // ~25 GB in double precision in 3D: a large GPU node
-constexpr int kHardMaxParticles = 2000000000;     // within the int the field is read into
+// solver.max_particles: default 1e8 (~25 GB in double precision in 3D: a large GPU node), at most this, within the
+// int the field is read into (scene_fields.cpp).
+constexpr int kHardMaxParticles = 2000000000;
 constexpr double kMaxCellsPerAxis = 4.0e6;         // block keys pack 21 bits per axis (2^21 blocks of 4 cells)
 
 // Particles seeded per box (seed_water in solver/seeding.h: lround(L / spacing) per axis, at least 1), in

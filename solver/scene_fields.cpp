@@ -32,6 +32,7 @@ const ObjectDoc& solver_doc() {
            .in(1, 64)
            .def_note("4 in 2D, 8 in 3D")
            .note("a perfect square in 2D (1, 4, 9, 16, ...), a perfect cube in 3D (1, 8, 27, 64)"),
+       // 1e8 particles: ~25 GB in double precision in 3D, a large GPU node; 2e9 fits the int it is read into.
        integer("max_particles", "bound on the particles the water boxes seed, checked before allocating")
            .in(1, 2000000000)
            .def(100000000),
