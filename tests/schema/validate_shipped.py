@@ -7,6 +7,7 @@ python3-jsonschema; skipped, exit 77, without it). The schemas themselves are ch
 import glob
 import json
 import os
+import re
 import subprocess
 import sys
 
@@ -22,9 +23,19 @@ shipped = {
     "scene": ["scenes/dam_break/*.json", "scenes/debris/*.json", "scenes/waseda/*.json", "bench/scenes/*.json",
               "tests/examples/*.json", "tests/schema/*.json"],
     "campaign": ["scenes/campaigns/*.json"],
-    "calibration": ["scenes/calibration/*.json", "examples/*.json"],
+    "calibration": ["docs/calibration.md"],  # no spec file ships: the spec example of the docs (```json blocks)
     "study": ["scenes/studies/*.json"],
 }
+
+
+def documents(path):
+    """A .json file's object, or the JSON objects of a Markdown file's ```json blocks."""
+    if not path.endswith(".md"):
+        return [json.load(open(path))]
+    blocks = re.findall(r"^```json\n(.*?)^```", open(path).read(), re.S | re.M)
+    return [json.loads(b) for b in blocks]
+
+
 kinds = [k for k in shipped if subprocess.run([flume, "schema", k], capture_output=True).returncode == 0]
 failures, count = [], 0
 for kind in kinds:
@@ -35,9 +46,10 @@ for kind in kinds:
     if not files:
         print(f"note: no shipped {kind} documents (patterns: {shipped[kind]})")
     for f in files:
-        count += 1
-        for e in validator.iter_errors(json.load(open(f))):
-            failures.append(f"{os.path.relpath(f, src)}: {'.'.join(map(str, e.absolute_path))}: {e.message}")
+        for doc in documents(f):
+            count += 1
+            for e in validator.iter_errors(doc):
+                failures.append(f"{os.path.relpath(f, src)}: {'.'.join(map(str, e.absolute_path))}: {e.message}")
 print(f"{count} shipped documents of kinds {', '.join(kinds)} checked against their schemas")
 if failures:
     print("\n".join(failures))
