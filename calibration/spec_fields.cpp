@@ -22,7 +22,8 @@ const ObjectDoc& parameter_doc() {
       "parameters[]",
       "A free parameter: a scene path (as `--set` takes it) or a model input, its bounds and start.",
       {string("path", "the scene field it sets (e.g. reservoir.gate_height_m) or the model's input").needed(),
-       choice("scale", {"linear", "log"}, "the optimizer works on the value, or on its logarithm").def("linear"),
+       choice("scale", {"linear", "log"}, "the optimizer works on the value, or on its logarithm")
+           .def("linear"),
        number("lower", "lower bound").needed().note("log scale: > 0"),
        number("upper", "upper bound").needed().note("above lower"),
        number("start", "the first start point").needed().note("in [lower, upper]")}};
@@ -51,7 +52,10 @@ const ObjectDoc& objective_doc() {
            .needed()
            .note("0 <= t0 < t1, within the simulated time"),
        number("peak_weight", "weight of the peak elevation misfit").in(0, 1e6).def(0.0),
-       number("arrival_weight_m_per_s", "weight of the arrival time misfit").in(0, 1e6).def(0.0).in_unit("m/s"),
+       number("arrival_weight_m_per_s", "weight of the arrival time misfit")
+           .in(0, 1e6)
+           .def(0.0)
+           .in_unit("m/s"),
        number("arrival_threshold_m", "a gauge's arrival: the first rise this far above its first reading")
            .above(0)
            .at_most(1)
@@ -71,7 +75,9 @@ const ObjectDoc& algorithm_doc() {
        integer("max_evaluations", "evaluations per start").in(1, 1000000).needed(),
        integer("polish_evaluations", "evaluations of the polish").in(1, 1000000).def(50),
        number("max_time_s", "wall-clock limit per start; 0: none").in(0, 1e9).def(0.0).in_unit("s"),
-       number("xtol_abs", "stop when a step moves every parameter less than this (unit cube)").in(0, 0.5).def(1e-4),
+       number("xtol_abs", "stop when a step moves every parameter less than this (unit cube)")
+           .in(0, 0.5)
+           .def(1e-4),
        number("ftol_abs", "stop when the objective changes less than this").in(0, 1e3).def(0.0),
        number("initial_step", "first step (unit cube)").above(0).at_most(0.5).def(0.1),
        integer("population", "population of the global algorithms; 0: NLopt's default").in(0, 100000).def(0),
@@ -80,20 +86,21 @@ const ObjectDoc& algorithm_doc() {
 }
 
 const ObjectDoc& multi_start_doc() {
-  static const ObjectDoc d{
-      "multi_start",
-      "Quasi-random extra starts (a shifted Halton sequence over the bounds).",
-      {integer("random", "number of extra starts").in(0, 1000).def(0),
-       integer("seed", "seed of the shift").in(0, 4294967295.0).def(1)}};
+  static const ObjectDoc d{"multi_start",
+                           "Quasi-random extra starts (a shifted Halton sequence over the bounds).",
+                           {integer("random", "number of extra starts").in(0, 1000).def(0),
+                            integer("seed", "seed of the shift").in(0, 4294967295.0).def(1)}};
   return d;
 }
 
 const ObjectDoc& profile_doc() {
-  static const ObjectDoc d{
-      "profile",
-      "Objective profiles through the optimum, one per parameter.",
-      {integer("points", "points per side; 0: no profiles").in(0, 100).def(5),
-       number("span", "half-width of a profile, a fraction of the parameter's range").above(0).at_most(1).def(0.15)}};
+  static const ObjectDoc d{"profile",
+                           "Objective profiles through the optimum, one per parameter.",
+                           {integer("points", "points per side; 0: no profiles").in(0, 100).def(5),
+                            number("span", "half-width of a profile, a fraction of the parameter's range")
+                                .above(0)
+                                .at_most(1)
+                                .def(0.15)}};
   return d;
 }
 
@@ -114,7 +121,8 @@ const ObjectDoc& target_doc() {
       {string("file", "the CSV file, relative to the working directory or the spec's folder").needed(),
        number("weight", "weight of its misfit").above(0).at_most(1e6).def(1.0),
        string("gauge", "the one gauge its single data column measures").eg("WG1"),
-       map("gauges", {{"type", "string"}}, "object {gauge: column}", "gauges and the columns that measure them")}};
+       map("gauges", {{"type", "string"}}, "object {gauge: column}",
+           "gauges and the columns that measure them")}};
   return d;
 }
 
@@ -123,7 +131,8 @@ const ObjectDoc& target_doc() {
 const ObjectDoc& calibration_doc() {
   static const ObjectDoc d{
       "calibration",
-      "A calibration spec: scene parameters fitted to measured gauge records (`flume calibrate SPEC --db FILE "
+      "A calibration spec: scene parameters fitted to measured gauge records (`flume calibrate SPEC --db "
+      "FILE "
       "--out DIR`, docs/calibration.md).",
       {string("name", "the calibration's name (letters, digits, '_', '-', '.')").needed(),
        string("description", "free text").def(""),
@@ -135,11 +144,12 @@ const ObjectDoc& calibration_doc() {
        object_array("parameters", parameter_doc(), "the free parameters, at least one").needed(),
        object("objective", objective_doc(), "the misfit").needed(),
        object("algorithm", algorithm_doc(), "the optimizer").needed(),
-       value("starts", json::parse(R"({"type": "array", "items": {"type": "object",
+       value(
+           "starts", json::parse(R"({"type": "array", "items": {"type": "object",
                                       "additionalProperties": {"type": "number"}}})"),
-             "array of objects {path: value}",
-             "extra start points; a path left out starts at its parameter's start (objective.time_shift_s: the "
-             "shift)"),
+           "array of objects {path: value}",
+           "extra start points; a path left out starts at its parameter's start (objective.time_shift_s: the "
+           "shift)"),
        object("multi_start", multi_start_doc(), "quasi-random starts"),
        object("profile", profile_doc(), "profiles through the optimum"),
        object("run", run_doc(), "how each run is run"),

@@ -1,5 +1,6 @@
 // The campaign spec's fields, described once (common/input/fields.h): campaigns/spec.cpp reads every value
-// through them, `flume schema campaign` prints them as a JSON Schema, docs/campaign-spec.md is generated from them.
+// through them, `flume schema campaign` prints them as a JSON Schema, docs/campaign-spec.md is generated from
+// them.
 #pragma once
 #include "common/input/fields.h"
 

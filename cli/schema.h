@@ -24,8 +24,8 @@ struct DocumentKind {
 const std::vector<DocumentKind>& document_kinds();
 const DocumentKind& document_kind(const std::string& name);  // throws std::out_of_range when unknown
 
-std::string schema_text(const DocumentKind& kind);     // the JSON Schema, indented, with a final newline
-std::string markdown_text(const DocumentKind& kind);   // the reference
+std::string schema_text(const DocumentKind& kind);    // the JSON Schema, indented, with a final newline
+std::string markdown_text(const DocumentKind& kind);  // the reference
 
 void add_schema_command(CLI::App& app);
 

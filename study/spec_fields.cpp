@@ -36,12 +36,12 @@ const ObjectDoc& study_outputs_doc() {
            .in_unit("s")
            .def(0.0)
            .note("at most the window's length"),
-       value("metrics",
-             json::parse(R"({"type": "array", "items": {"oneOf": [{"type": "string"},
+       value("metrics", json::parse(R"({"type": "array", "items": {"oneOf": [{"type": "string"},
                  {"type": "object", "properties": {"name": {"type": "string"}, "scale": {"type": "number", "minimum": 0}},
                   "required": ["name"], "additionalProperties": false}]}})"),
              "array of names or {name, scale}",
-             "run.json metrics to compare (`*` matches any characters but '.'); scale: the relative difference's "
+             "run.json metrics to compare (`*` matches any characters but '.'); scale: the relative "
+             "difference's "
              "least denominator, in the metric's unit")
            .eg(json::array({"D1.rest_x_m"}))}};
   return d;
@@ -52,29 +52,33 @@ const ObjectDoc& study_reference_doc() {
       "reference",
       "What the settings are compared with: exactly one of a setting and a measured record.",
       {string("setting", "the label of one of the settings"),
-       string("records", "a CSV file of gauge records (time_s and a column per gauge), relative to the working "
-                         "directory or the spec's folder")}};
+       string("records",
+              "a CSV file of gauge records (time_s and a column per gauge), relative to the working "
+              "directory or the spec's folder")}};
   return d;
 }
 
 const ObjectDoc& study_doc() {
   static const ObjectDoc d = [] {
     const ObjectDoc& campaign = campaigns::campaign_doc();
-    ObjectDoc s{"study",
-                "A study spec (`flume study tradeoff SPEC --db FILE`, docs/tradeoff.md): settings of one scene run "
-                "as a campaign with a list design, each compared with the reference over the outputs.",
-                {}};
+    ObjectDoc s{
+        "study",
+        "A study spec (`flume study tradeoff SPEC --db FILE`, docs/tradeoff.md): settings of one scene run "
+        "as a campaign with a list design, each compared with the reference over the outputs.",
+        {}};
     // Read by the campaign parser, as a campaign spec's.
-    for (const char* key : {"name", "description", "scene", "overrides"}) s.fields.push_back(*campaign.find(key));
+    for (const char* key : {"name", "description", "scene", "overrides"})
+      s.fields.push_back(*campaign.find(key));
     s.fields[2].required = true;  // scene: a study has no model
     s.fields[2].required_when.clear();
     s.fields.push_back(
-        value("settings", json::parse(R"({"type": "array", "minItems": 2, "items": {"type": "object",
+        value(
+            "settings", json::parse(R"({"type": "array", "minItems": 2, "items": {"type": "object",
                  "properties": {"label": {"type": "string", "minLength": 1}}, "required": ["label"],
                  "additionalProperties": {"type": ["number", "string"]}}})"),
-              "array of objects {label, path: value, ...}",
-              "the fidelity settings, at least two: each a label and the scene paths it sets (`scene`: another "
-              "scene file)")
+            "array of objects {label, path: value, ...}",
+            "the fidelity settings, at least two: each a label and the scene paths it sets (`scene`: another "
+            "scene file)")
             .needed());
     s.fields.push_back(object("reference", study_reference_doc(), "the reference").needed());
     s.fields.push_back(object("outputs", study_outputs_doc(), "what is compared"));

@@ -26,8 +26,9 @@ std::string FieldReader::join(const std::string& key) const {
 
 const Field& FieldReader::described(const std::string& key) const {
   const Field* f = doc_.find(key);
-  if (!f) throw std::logic_error("the parser reads " + join(key) + ", which the description of '" + doc_.title +
-                                 "' does not list (common/input/fields.h)");
+  if (!f)
+    throw std::logic_error("the parser reads " + join(key) + ", which the description of '" + doc_.title +
+                           "' does not list (common/input/fields.h)");
   return *f;
 }
 
@@ -66,7 +67,8 @@ double FieldReader::number_or(const std::string& key, double def, std::optional<
   const json& v = raw(key);
   if (!v.is_number()) fail(key, "must be a number in " + range + ", got " + type_name(v));
   const double x = v.get<double>();
-  const bool ok = std::isfinite(x) && (r.lo_open ? x > r.lo : x >= r.lo) && (r.hi_open ? x < r.hi : x <= r.hi);
+  const bool ok =
+      std::isfinite(x) && (r.lo_open ? x > r.lo : x >= r.lo) && (r.hi_open ? x < r.hi : x <= r.hi);
   if (!ok) fail(key, "must be in " + range + " (got " + number_text(x) + ")");
   return x;
 }
@@ -101,7 +103,8 @@ long long FieldReader::integer_or(const std::string& key, long long def,
 long long FieldReader::integer(const std::string& key, std::optional<std::pair<long long, long long>> b) {
   const Field& f = field(key, FieldType::kInteger);
   if (!has(key)) {
-    const double lo = b ? static_cast<double>(b->first) : f.lo, hi = b ? static_cast<double>(b->second) : f.hi;
+    const double lo = b ? static_cast<double>(b->first) : f.lo,
+                 hi = b ? static_cast<double>(b->second) : f.hi;
     if (!f.default_value.is_number()) missing(f, "an integer in " + integer_range_text(lo, hi));
     return f.default_value.get<long long>();
   }
@@ -159,7 +162,8 @@ std::string FieldReader::choice(const std::string& key) {
   return choice_or(key, "");
 }
 
-std::array<double, 3> FieldReader::vec(const std::string& key, int n, std::optional<std::array<double, 3>> def) {
+std::array<double, 3> FieldReader::vec(const std::string& key, int n,
+                                       std::optional<std::array<double, 3>> def) {
   const Field& f = field(key, FieldType::kVector);
   if (n < f.min_items || n > f.max_items || n > 3)
     throw std::logic_error("the parser reads " + join(key) + " with a length its description does not allow");
@@ -192,7 +196,8 @@ std::vector<FieldReader> FieldReader::objects(const std::string& key) {
   if (!has(key)) return out;
   const json& v = raw(key);
   if (!v.is_array()) fail(key, std::string("must be an array, got ") + type_name(v));
-  for (size_t i = 0; i < v.size(); ++i) out.emplace_back(v[i], *f.object, join(key) + "." + std::to_string(i), file_);
+  for (size_t i = 0; i < v.size(); ++i)
+    out.emplace_back(v[i], *f.object, join(key) + "." + std::to_string(i), file_);
   return out;
 }
 

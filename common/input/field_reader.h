@@ -34,7 +34,7 @@ class FieldReader {
 
   bool has(const std::string& key) const;
   const nlohmann::json& raw(const std::string& key);  // marks it read
-  void accept(const std::string& key);                 // marks it read without reading it (a later pass does)
+  void accept(const std::string& key);                // marks it read without reading it (a later pass does)
 
   // The description's default and range, or `b` / `def` where they follow from other fields.
   double number(const std::string& key, std::optional<Bounds> b = std::nullopt);
@@ -56,8 +56,9 @@ class FieldReader {
     fail(key, "has no value for '" + s + "' (internal)");
   }
   // An array of `n` finite numbers (n within the description's item counts); `def` where absent.
-  std::array<double, 3> vec(const std::string& key, int n, std::optional<std::array<double, 3>> def = std::nullopt);
-  FieldReader object(const std::string& key);               // absent: an empty object
+  std::array<double, 3> vec(const std::string& key, int n,
+                            std::optional<std::array<double, 3>> def = std::nullopt);
+  FieldReader object(const std::string& key);                // absent: an empty object
   std::vector<FieldReader> objects(const std::string& key);  // an array of objects; absent: none
   const nlohmann::json& array(const std::string& key);       // any array, checked by the caller; absent: []
   const nlohmann::json& map(const std::string& key);         // an object with free keys; absent: {}

@@ -23,14 +23,18 @@ Field make(std::string key, FieldType type, std::string meaning) {
 }
 }  // namespace
 
-Field number(std::string key, std::string meaning) { return make(std::move(key), FieldType::kNumber, std::move(meaning)); }
+Field number(std::string key, std::string meaning) {
+  return make(std::move(key), FieldType::kNumber, std::move(meaning));
+}
 Field integer(std::string key, std::string meaning) {
   return make(std::move(key), FieldType::kInteger, std::move(meaning));
 }
 Field boolean(std::string key, std::string meaning) {
   return make(std::move(key), FieldType::kBoolean, std::move(meaning));
 }
-Field string(std::string key, std::string meaning) { return make(std::move(key), FieldType::kString, std::move(meaning)); }
+Field string(std::string key, std::string meaning) {
+  return make(std::move(key), FieldType::kString, std::move(meaning));
+}
 Field choice(std::string key, std::vector<std::string> choices, std::string meaning) {
   Field f = make(std::move(key), FieldType::kChoice, std::move(meaning));
   f.choices = std::move(choices);
@@ -70,7 +74,9 @@ std::string number_text(double v) {
 }
 
 std::string integer_range_text(double lo, double hi) {
-  auto text = [](double v) { return std::isfinite(v) ? std::to_string(static_cast<long long>(v)) : number_text(v); };
+  auto text = [](double v) {
+    return std::isfinite(v) ? std::to_string(static_cast<long long>(v)) : number_text(v);
+  };
   return "[" + text(lo) + ", " + text(hi) + "]";
 }
 
@@ -112,19 +118,34 @@ ojson field_schema(const Field& f) {
       if (std::isfinite(f.lo)) s[f.lo_open ? "exclusiveMinimum" : "minimum"] = f.lo;
       if (std::isfinite(f.hi)) s[f.hi_open ? "exclusiveMaximum" : "maximum"] = f.hi;
       break;
-    case FieldType::kBoolean: s["type"] = "boolean"; break;
-    case FieldType::kString: s["type"] = "string"; break;
+    case FieldType::kBoolean:
+      s["type"] = "boolean";
+      break;
+    case FieldType::kString:
+      s["type"] = "string";
+      break;
     case FieldType::kChoice:
       s["type"] = "string";
       s["enum"] = f.choices;
       break;
     case FieldType::kVector:
-      s = {{"type", "array"}, {"items", {{"type", "number"}}}, {"minItems", f.min_items}, {"maxItems", f.max_items}};
+      s = {{"type", "array"},
+           {"items", {{"type", "number"}}},
+           {"minItems", f.min_items},
+           {"maxItems", f.max_items}};
       break;
-    case FieldType::kObject: s = object_schema(*f.object); break;
-    case FieldType::kObjectArray: s = {{"type", "array"}, {"items", object_schema(*f.object)}}; break;
-    case FieldType::kMap: s = {{"type", "object"}, {"additionalProperties", ordered(f.value_schema)}}; break;
-    case FieldType::kValue: s = ordered(f.value_schema); break;
+    case FieldType::kObject:
+      s = object_schema(*f.object);
+      break;
+    case FieldType::kObjectArray:
+      s = {{"type", "array"}, {"items", object_schema(*f.object)}};
+      break;
+    case FieldType::kMap:
+      s = {{"type", "object"}, {"additionalProperties", ordered(f.value_schema)}};
+      break;
+    case FieldType::kValue:
+      s = ordered(f.value_schema);
+      break;
   }
   if (!f.default_value.is_null()) s["default"] = ordered(f.default_value);
   s["description"] = description(f);
@@ -133,7 +154,9 @@ ojson field_schema(const Field& f) {
 }
 
 ojson object_schema(const ObjectDoc& doc) {
-  ojson s = {{"type", "object"}, {"description", doc.meaning}, {"properties", ojson::object()},
+  ojson s = {{"type", "object"},
+             {"description", doc.meaning},
+             {"properties", ojson::object()},
              {"additionalProperties", false}};
   ojson required = ojson::array();
   for (const auto& f : doc.fields) {
@@ -147,19 +170,26 @@ ojson object_schema(const ObjectDoc& doc) {
 std::string cell(std::string text) {
   std::string out;
   for (char c : text) {
-    if (c == '|') out += "\\|";
-    else if (c == '\n') out += ' ';
-    else out += c;
+    if (c == '|')
+      out += "\\|";
+    else if (c == '\n')
+      out += ' ';
+    else
+      out += c;
   }
   return out;
 }
 
 std::string type_text(const Field& f, const std::string& child_path) {
   switch (f.type) {
-    case FieldType::kNumber: return "number";
-    case FieldType::kInteger: return "integer";
-    case FieldType::kBoolean: return "boolean";
-    case FieldType::kString: return "string";
+    case FieldType::kNumber:
+      return "number";
+    case FieldType::kInteger:
+      return "integer";
+    case FieldType::kBoolean:
+      return "boolean";
+    case FieldType::kString:
+      return "string";
     case FieldType::kChoice: {
       std::string s;
       for (const auto& c : f.choices) s += (s.empty() ? "" : " \\| ") + ("`" + c + "`");
@@ -170,9 +200,12 @@ std::string type_text(const Field& f, const std::string& child_path) {
              (f.min_items == f.max_items ? std::to_string(f.min_items)
                                          : std::to_string(f.min_items) + "-" + std::to_string(f.max_items)) +
              " numbers";
-    case FieldType::kObject: return "object, see `" + child_path + "`";
-    case FieldType::kObjectArray: return "array of objects, see `" + child_path + "`";
-    default: return cell(f.type_text);
+    case FieldType::kObject:
+      return "object, see `" + child_path + "`";
+    case FieldType::kObjectArray:
+      return "array of objects, see `" + child_path + "`";
+    default:
+      return cell(f.type_text);
   }
 }
 
@@ -203,7 +236,8 @@ void markdown_object(const ObjectDoc& doc, const std::string& path, std::string&
     const std::string req = f.required ? "yes" : (f.required_when.empty() ? "" : cell(f.required_when));
     out += "| `" + f.key + "` | " + type_text(f, child) + " | " + req + " | " + default_text(f) + " | " +
            allowed_text(f) + " | " + cell(f.unit) + " | " + cell(f.meaning) + " |\n";
-    if (f.type == FieldType::kObject || f.type == FieldType::kObjectArray) queue.emplace_back(f.object, child);
+    if (f.type == FieldType::kObject || f.type == FieldType::kObjectArray)
+      queue.emplace_back(f.object, child);
   }
 }
 
@@ -228,8 +262,8 @@ nlohmann::ordered_json json_schema(const ObjectDoc& root, const std::string& id,
 std::string markdown_reference(const ObjectDoc& root, const std::string& title, const std::string& intro,
                                const std::string& command) {
   std::string out = "# " + title + "\n\n<!-- Generated by `" + command +
-                    "` from the field descriptions the parser reads with; do not edit by hand. -->\n\n" + intro +
-                    "\n";
+                    "` from the field descriptions the parser reads with; do not edit by hand. -->\n\n" +
+                    intro + "\n";
   // Breadth-first, so that each section follows the one that names it.
   std::vector<std::pair<const ObjectDoc*, std::string>> queue = {{&root, ""}};
   for (size_t i = 0; i < queue.size(); ++i) {

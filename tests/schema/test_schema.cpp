@@ -1,8 +1,7 @@
-// The field descriptions (common/input/fields.h) against the parsers that read with them: every described field
-// is accepted by its parser, the parser cannot read a field its description lacks, and the references in docs/
-// are what `flume schema KIND --markdown` generates now (so they cannot drift from the code).
+// The field descriptions (common/input/fields.h) against the parsers that read with them: every described
+// field is accepted by its parser, the parser cannot read a field its description lacks, and the references
+// in docs/ are what `flume schema KIND --markdown` generates now (so they cannot drift from the code).
 #include <gtest/gtest.h>
-
 #include <unistd.h>
 
 #include <cctype>
@@ -13,13 +12,13 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "cli/schema.h"
-#include "common/errors.h"
-#include "common/input/field_reader.h"
 #include "calibration/spec.h"
 #include "calibration/spec_fields.h"
 #include "campaigns/spec.h"
 #include "campaigns/spec_fields.h"
+#include "cli/schema.h"
+#include "common/errors.h"
+#include "common/input/field_reader.h"
 #include "solver/scene.h"
 #include "solver/scene_fields.h"
 #include "study/spec_fields.h"
@@ -49,8 +48,10 @@ TEST(FieldReader, ReadingAnUndescribedFieldIsAProgrammingError) {
 }
 
 TEST(FieldReader, MessagesNameFileFieldAndAllowedRange) {
-  const input::ObjectDoc doc{"t", "", {input::number("x", "a number").above(0).at_most(1).needed(),
-                                       input::choice("c", {"a", "b"}, "a choice").def("a")}};
+  const input::ObjectDoc doc{"t",
+                             "",
+                             {input::number("x", "a number").above(0).at_most(1).needed(),
+                              input::choice("c", {"a", "b"}, "a choice").def("a")}};
   auto message = [&](const json& j, auto read) {
     try {
       input::FieldReader r(j, doc, "sec", "f.json");
@@ -63,7 +64,8 @@ TEST(FieldReader, MessagesNameFileFieldAndAllowedRange) {
   };
   EXPECT_EQ(message(json::object(), [](auto& r) { r.number("x"); }),
             "f.json: sec.x: is required (a number in (0, 1])");
-  EXPECT_EQ(message(json{{"x", 2}}, [](auto& r) { r.number("x"); }), "f.json: sec.x: must be in (0, 1] (got 2)");
+  EXPECT_EQ(message(json{{"x", 2}}, [](auto& r) { r.number("x"); }),
+            "f.json: sec.x: must be in (0, 1] (got 2)");
   EXPECT_EQ(message(json{{"x", "2"}}, [](auto& r) { r.number("x"); }),
             "f.json: sec.x: must be a number in (0, 1], got a string");
   EXPECT_EQ(message(json{{"x", 1}, {"c", "z"}}, [](auto& r) { r.number("x"), r.choice("c"); }),
@@ -80,7 +82,8 @@ std::vector<json> valid_values(const input::Field& f) {
   if (f.type == input::FieldType::kChoice) out.push_back(f.choices.front());
   if (f.type == input::FieldType::kObject) out.push_back(json::object());
   if (f.type == input::FieldType::kVector)
-    for (int n = f.min_items; n <= f.max_items; ++n) out.push_back(std::vector<double>(static_cast<size_t>(n), 0.0));
+    for (int n = f.min_items; n <= f.max_items; ++n)
+      out.push_back(std::vector<double>(static_cast<size_t>(n), 0.0));
   return out;
 }
 
@@ -98,9 +101,10 @@ void expect_every_field_accepted(const input::ObjectDoc& doc, const std::vector<
     std::string last = "no base document has its enclosing object";
     bool accepted = false;
     for (const json& base : bases) {
-      const bool parent = base.contains(ptr.parent_pointer()) ||
-                          (!ptr.parent_pointer().empty() && base.contains(ptr.parent_pointer().parent_pointer()) &&
-                           !std::isdigit(static_cast<unsigned char>(ptr.parent_pointer().back()[0])));
+      const bool parent =
+          base.contains(ptr.parent_pointer()) ||
+          (!ptr.parent_pointer().empty() && base.contains(ptr.parent_pointer().parent_pointer()) &&
+           !std::isdigit(static_cast<unsigned char>(ptr.parent_pointer().back()[0])));
       if (!base.contains(ptr) && !parent) continue;
       std::vector<json> values = {json()};  // null: the base's own value
       if (!base.contains(ptr)) values = valid_values(*field);
@@ -123,10 +127,11 @@ void expect_every_field_accepted(const input::ObjectDoc& doc, const std::vector<
 
 TEST(SceneSchema, EveryDescribedFieldIsAcceptedByTheParser) {
   std::vector<json> bases;
-  for (const char* f : {"scenes/debris/bore_container.json", "scenes/dam_break/martin_moyce_2d.json",
-                        "scenes/waseda/waseda_2d.json", "scenes/waseda/waseda_3d.json", "scenes/waseda/waseda_3d_half.json",
-                        "scenes/waseda/waseda_apron.json", "scenes/debris/grounding_sheet.json",
-                        "tests/schema/box_boundary_2d.json", "tests/schema/basin_debris_3d.json"})
+  for (const char* f :
+       {"scenes/debris/bore_container.json", "scenes/dam_break/martin_moyce_2d.json",
+        "scenes/waseda/waseda_2d.json", "scenes/waseda/waseda_3d.json", "scenes/waseda/waseda_3d_half.json",
+        "scenes/waseda/waseda_apron.json", "scenes/debris/grounding_sheet.json",
+        "tests/schema/box_boundary_2d.json", "tests/schema/basin_debris_3d.json"})
     bases.push_back(json::parse(slurp(kSource + "/" + f)));
   expect_every_field_accepted(scene_doc(), bases, [](json d) -> std::string {
     // An inflow record is given at run time (--set inflow.record=RUN/result.h5): named here, so that the only
@@ -146,26 +151,28 @@ TEST(SceneSchema, EveryDescribedFieldIsAcceptedByTheParser) {
 TEST(CampaignSchema, EveryDescribedFieldIsAcceptedByTheParser) {
   const std::string u = R"({"type": "uniform", "lower": 0, "upper": 1})";
   std::vector<json> bases;
-  for (const std::string& text : std::vector<std::string>{
-           // each distribution type as parameters.0, each design type, correlation, run, overrides
-           R"({"name": "a", "description": "d", "model": "ishigami", "overrides": {"x3": 0.5},
-               "parameters": [{"path": "x1", "distribution": )" + u + R"(},
+  for (
+      const std::string& text : std::vector<std::string>{
+          // each distribution type as parameters.0, each design type, correlation, run, overrides
+          R"({"name": "a", "description": "d", "model": "ishigami", "overrides": {"x3": 0.5},
+               "parameters": [{"path": "x1", "distribution": )" +
+              u + R"(},
                               {"path": "x2", "distribution": {"type": "normal", "mean": 0, "std": 1}}],
                "correlation": [{"parameters": ["x1", "x2"], "rank": 0.3}],
                "design": {"type": "lhs", "samples": 4}, "seed": 1,
                "run": {"time_limit_s": 60, "threads": 1, "memory_limit_mb": 0, "output_dir": "", "checkpoint_every_s": 0}})",
-           R"({"name": "b", "model": "ishigami", "parameters": [{"path": "x1", "distribution": {"type": "normal", "mean": 0, "std": 1}}],
+          R"({"name": "b", "model": "ishigami", "parameters": [{"path": "x1", "distribution": {"type": "normal", "mean": 0, "std": 1}}],
                "design": {"type": "saltelli", "samples": 2, "base": "sobol"}, "seed": 1})",
-           R"({"name": "c", "model": "ishigami", "parameters": [{"path": "x1", "distribution": {"type": "lognormal", "mu_log": 0, "sigma_log": 0.5}}],
+          R"({"name": "c", "model": "ishigami", "parameters": [{"path": "x1", "distribution": {"type": "lognormal", "mu_log": 0, "sigma_log": 0.5}}],
                "design": {"type": "grid", "levels": 2}, "seed": 1})",
-           R"({"name": "d", "model": "ishigami", "parameters": [{"path": "x1", "distribution": {"type": "beta", "alpha": 2, "beta": 2, "lower": 0, "upper": 1}}],
+          R"({"name": "d", "model": "ishigami", "parameters": [{"path": "x1", "distribution": {"type": "beta", "alpha": 2, "beta": 2, "lower": 0, "upper": 1}}],
                "design": {"type": "one_at_a_time"}, "seed": 1})",
-           R"({"name": "e", "model": "ishigami", "parameters": [{"path": "x1", "distribution": {"type": "choice", "values": [1, 2], "weights": [1, 1]}}],
+          R"({"name": "e", "model": "ishigami", "parameters": [{"path": "x1", "distribution": {"type": "choice", "values": [1, 2], "weights": [1, 1]}}],
                "design": {"type": "monte_carlo", "samples": 2}, "seed": 1})",
-           R"({"name": "f", "model": "ishigami", "parameters": [{"path": "x1", "distribution": {"type": "truncated_normal", "mean": 0, "std": 1, "lower": -1, "upper": 1}}],
+          R"({"name": "f", "model": "ishigami", "parameters": [{"path": "x1", "distribution": {"type": "truncated_normal", "mean": 0, "std": 1, "lower": -1, "upper": 1}}],
                "design": {"type": "sobol", "samples": 2}, "seed": 1})",
-           R"({"name": "g", "model": "ishigami", "design": {"type": "list", "points": [{"label": "p", "x1": 1}, {"label": "q", "x1": 2}]}})",
-           R"({"name": "h", "scene": "tests/schema/box_boundary_2d.json",
+          R"({"name": "g", "model": "ishigami", "design": {"type": "list", "points": [{"label": "p", "x1": 1}, {"label": "q", "x1": 2}]}})",
+          R"({"name": "h", "scene": "tests/schema/box_boundary_2d.json",
                "parameters": [{"path": "solver.cfl", "distribution": {"type": "uniform", "lower": 0.3, "upper": 0.4}}],
                "design": {"type": "monte_carlo", "samples": 2}, "seed": 1})"})
     bases.push_back(json::parse(text));
@@ -185,11 +192,13 @@ TEST(CalibrationSchema, EveryDescribedFieldIsAcceptedByTheParser) {
   std::filesystem::create_directories(dir);
   std::ofstream(dir / "wg1.csv") << "time_s,WG1\n0,0\n1,0.05\n2,0\n";
   std::ofstream(dir / "g1.csv") << "time_s,G1\n0,0\n0.05,0\n0.1,0\n";
-  const std::string params = R"([{"path": "reservoir.forcing.t99_s", "scale": "linear", "lower": 0.05, "upper": 2, "start": 0.2},
+  const std::string params =
+      R"([{"path": "reservoir.forcing.t99_s", "scale": "linear", "lower": 0.05, "upper": 2, "start": 0.2},
                                   {"path": "reservoir.gate_height_m", "lower": 0.04, "upper": 0.16, "start": 0.12}])";
   std::vector<json> bases;
   for (const std::string& text : std::vector<std::string>{
-           R"({"name": "a", "description": "d", "model": "gauge", "overrides": {}, "parameters": )" + params + R"(,
+           R"({"name": "a", "description": "d", "model": "gauge", "overrides": {}, "parameters": )" + params +
+               R"(,
                "objective": {"window": [0, 2], "peak_weight": 1, "arrival_weight_m_per_s": 1, "arrival_threshold_m": 0.005,
                              "time_shift": {"lower": -0.1, "upper": 0.1, "start": 0}},
                "algorithm": {"name": "MLSL", "local": "SBPLX", "polish": "BOBYQA", "max_evaluations": 5,
@@ -198,7 +207,8 @@ TEST(CalibrationSchema, EveryDescribedFieldIsAcceptedByTheParser) {
                "starts": [{"reservoir.forcing.t99_s": 0.3}], "multi_start": {"random": 1, "seed": 1},
                "profile": {"points": 2, "span": 0.1}, "run": {"time_limit_s": 60, "threads": 1, "output_dir": ""},
                "targets": [{"file": "wg1.csv", "weight": 1, "gauge": "WG1"}]})",
-           R"({"name": "b", "model": "gauge", "parameters": )" + params + R"(, "objective": {"window": [0, 2]},
+           R"({"name": "b", "model": "gauge", "parameters": )" + params +
+               R"(, "objective": {"window": [0, 2]},
                "algorithm": {"name": "SBPLX", "max_evaluations": 5}, "targets": [{"file": "wg1.csv", "gauges": {"WG1": "WG1"}}]})",
            R"({"name": "c", "scene": ")" + kSource + R"(/tests/schema/box_boundary_2d.json",
                "parameters": [{"path": "solver.cfl", "scale": "log", "lower": 0.3, "upper": 0.5, "start": 0.4}],
@@ -231,8 +241,8 @@ TEST(StudySchema, EveryDescribedFieldIsAcceptedByTheParser) {
   });
 }
 
-// docs/scene.md (and each spec's reference) is what `flume schema KIND --markdown` prints now; regenerate with
-// scripts/schema-docs after changing a description.
+// docs/scene.md (and each spec's reference) is what `flume schema KIND --markdown` prints now; regenerate
+// with scripts/schema-docs after changing a description.
 TEST(SchemaDocs, ReferencesInDocsAreGeneratedFromTheDescriptions) {
   for (const auto& kind : cli::document_kinds()) {
     const std::string file = kSource + "/" + kind.reference;
