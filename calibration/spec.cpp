@@ -16,6 +16,8 @@
 #include "campaigns/run_folders.h"
 #include "campaigns/spec.h"
 #include "common/errors.h"
+#include "calibration/spec_fields.h"
+#include "common/input/field_reader.h"
 #include "common/input/json_input.h"
 #include "solver/scene.h"
 
@@ -34,101 +36,8 @@ std::string fmt(double v) {
 
 using input::type_name;
 
-// A JSON object being read; finish() rejects fields nobody asked for, so a typo is an error.
-class Reader {
- public:
-  Reader(const json& j, std::string path, std::string file)
-      : j_(j), path_(std::move(path)), file_(std::move(file)) {
-    if (!j_.is_object()) fail("", std::string("must be an object, got ") + type_name(j_));
-  }
-  [[noreturn]] void fail(const std::string& key, const std::string& what) const {
-    throw InputError(file_, join(key), what);
-  }
-  std::string join(const std::string& key) const {
-    if (key.empty()) return path_;
-    return path_.empty() ? key : path_ + "." + key;
-  }
-  bool has(const std::string& key) const { return j_.contains(key); }
-  const json& raw(const std::string& key) {
-    used_.insert(key);
-    return j_.at(key);
-  }
-  double number(const std::string& key, std::optional<double> def, double lo = -kInf, double hi = kInf,
-                bool lo_open = false) {
-    const std::string range = std::string(lo_open ? "(" : "[") + (std::isinf(lo) ? "-inf" : fmt(lo)) + ", " +
-                              (std::isinf(hi) ? "inf)" : fmt(hi) + "]");
-    if (!has(key)) {
-      if (!def) fail(key, "is required (a number in " + range + ")");
-      return *def;
-    }
-    const json& v = raw(key);
-    if (!v.is_number()) fail(key, std::string("must be a number in " + range + ", got ") + type_name(v));
-    const double x = v.get<double>();
-    if (!std::isfinite(x) || (lo_open ? !(x > lo) : !(x >= lo)) || !(x <= hi))
-      fail(key, "must be in " + range + " (got " + fmt(x) + ")");
-    return x;
-  }
-  std::int64_t integer(const std::string& key, std::int64_t def, std::int64_t lo, std::int64_t hi) {
-    const std::string range = "[" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
-    if (!has(key)) return def;
-    const json& v = raw(key);
-    if (!v.is_number() || std::floor(v.get<double>()) != v.get<double>())
-      fail(key, "must be an integer in " + range + ", got " +
-                    (v.is_number() ? fmt(v.get<double>()) : type_name(v)));
-    const double x = v.get<double>();
-    if (x < static_cast<double>(lo) || x > static_cast<double>(hi))
-      fail(key, "must be in " + range + " (got " + fmt(x) + ")");
-    return static_cast<std::int64_t>(x);
-  }
-  std::string string(const std::string& key, std::optional<std::string> def) {
-    if (!has(key)) {
-      if (!def) fail(key, "is required (a string)");
-      return *def;
-    }
-    const json& v = raw(key);
-    if (!v.is_string()) fail(key, std::string("must be a string, got ") + type_name(v));
-    return v.get<std::string>();
-  }
-  std::string choice(const std::string& key, std::optional<std::string> def,
-                     const std::vector<std::string>& options) {
-    std::string allowed;
-    for (const auto& o : options) allowed += (allowed.empty() ? "" : "|") + o;
-    if (!has(key)) {
-      if (!def) fail(key, "is required (one of " + allowed + ")");
-      return *def;
-    }
-    const json& v = raw(key);
-    if (!v.is_string() || std::find(options.begin(), options.end(), v.get<std::string>()) == options.end())
-      fail(key, "must be one of " + allowed + " (got " + v.dump() + ")");
-    return v.get<std::string>();
-  }
-  Reader object(const std::string& key) {
-    static const json empty = json::object();
-    return has(key) ? Reader(raw(key), join(key), file_) : Reader(empty, join(key), file_);
-  }
-  const json& array(const std::string& key) {
-    static const json empty = json::array();
-    if (!has(key)) return empty;
-    const json& v = raw(key);
-    if (!v.is_array()) fail(key, std::string("must be an array, got ") + type_name(v));
-    return v;
-  }
-  void accept(const std::string& key) { used_.insert(key); }
-  void finish() const {
-    for (auto it = j_.begin(); it != j_.end(); ++it) {
-      if (used_.count(it.key())) continue;
-      std::string known;
-      for (const auto& k : used_) known += (known.empty() ? "" : ", ") + k;
-      fail(it.key(), "unknown field" + (known.empty() ? std::string() : " (read here: " + known + ")"));
-    }
-  }
-
- private:
-  const json& j_;
-  std::string path_;
-  std::string file_;
-  std::set<std::string> used_;
-};
+using Reader = input::FieldReader;
+using input::Bounds;
 
 struct AlgorithmInfo {
   const char* name;
@@ -140,13 +49,6 @@ const std::vector<AlgorithmInfo>& algorithms() {
                                                   {"SBPLX", true},  {"CRS2_LM", false}, {"DIRECT_L", false},
                                                   {"ISRES", false}, {"MLSL", false}};
   return list;
-}
-
-std::vector<std::string> local_names() {
-  std::vector<std::string> out;
-  for (const auto& a : algorithms())
-    if (a.local) out.push_back(a.name);
-  return out;
 }
 
 
@@ -225,21 +127,21 @@ CalibrationSpec parse_calibration_spec(const std::string& json_text, const std::
   const json root_json = input::parse_json_document(json_text, file_label);
   CalibrationSpec spec;
   spec.file = file_label;
-  Reader root(root_json, "", spec.file);
+  Reader root(root_json, calibration_doc(), "", spec.file);
   json identity = json::object();  // what the results depend on; see CalibrationSpec::canonical
 
-  spec.name = root.string("name", std::nullopt);
+  spec.name = root.string("name");
   if (const std::string problem = campaigns::campaign_name_problem(spec.name); !problem.empty()) root.fail("name", problem);
   identity["name"] = spec.name;
-  spec.description = root.string("description", std::string());
+  spec.description = root.string("description");
 
   // The simulator: a scene (default the Waseda 2D slice) or the `gauge` test stand-in.
   if (root.has("scene") && root.has("model")) root.fail("model", "give either scene or model, not both");
   if (root.has("model")) {
-    spec.model = root.choice("model", std::nullopt, {"gauge"});
+    spec.model = root.choice("model");
     identity["model"] = spec.model;
   } else {
-    const std::string scene = root.string("scene", std::string("scenes/waseda/waseda_2d.json"));
+    const std::string scene = root.string("scene");
     spec.scene = resolve(scene, base_dir);
     if (spec.scene.empty())
       root.fail("scene",
@@ -250,40 +152,32 @@ CalibrationSpec parse_calibration_spec(const std::string& json_text, const std::
   }
 
   {
-    Reader o = root.object("overrides");
-    if (root.has("overrides"))
-      for (auto it = root_json["overrides"].begin(); it != root_json["overrides"].end(); ++it) {
-        o.accept(it.key());
-        spec.overrides.emplace_back(it.key(), it.value().dump());
-      }
-    o.finish();
+    const json& overrides = root.map("overrides");
+    for (auto it = overrides.begin(); it != overrides.end(); ++it) spec.overrides.emplace_back(it.key(), it.value().dump());
     identity["overrides"] = root_json.value("overrides", json::object());
   }
 
   // Free parameters.
-  const json& params = root.array("parameters");
+  auto params = root.objects("parameters");
   if (params.empty())
     root.fail("parameters", "is required: a non-empty array of {path, lower, upper, start}");
   std::set<std::string> paths;
-  for (size_t i = 0; i < params.size(); ++i) {
-    Reader p(params[i], "parameters." + std::to_string(i), spec.file);
+  for (auto& p : params) {
     FreeParameter fp;
-    fp.path = p.string("path", std::nullopt);
+    fp.path = p.string("path");
     if (fp.path.empty()) p.fail("path", "must not be empty");
     if (fp.path == kTimeShiftPath) p.fail("path", "the time shift is set with objective.time_shift");
     if (!paths.insert(fp.path).second) p.fail("path", "'" + fp.path + "' is already a free parameter");
     for (const auto& [path, value] : spec.overrides)
       if (path == fp.path) p.fail("path", "'" + fp.path + "' is also a fixed override");
-    fp.scale =
-        p.choice("scale", std::string("linear"), {"linear", "log"}) == "log" ? Scale::kLog : Scale::kLinear;
-    fp.lower =
-        p.number("lower", std::nullopt, fp.scale == Scale::kLog ? 0.0 : -kInf, kInf, fp.scale == Scale::kLog);
-    fp.upper = p.number("upper", std::nullopt, fp.lower, kInf, true);
-    fp.start = p.number("start", std::nullopt, fp.lower, fp.upper);
+    fp.scale = p.choice("scale") == "log" ? Scale::kLog : Scale::kLinear;
+    fp.lower = p.number("lower", Bounds{fp.scale == Scale::kLog ? 0.0 : -kInf, kInf, fp.scale == Scale::kLog});
+    fp.upper = p.number("upper", Bounds{fp.lower, kInf, true});
+    fp.start = p.number("start", Bounds{fp.lower, fp.upper});
     p.finish();
     spec.parameters.push_back(fp);
   }
-  identity["parameters"] = params;
+  identity["parameters"] = root_json["parameters"];
 
   // Objective.
   {
@@ -296,17 +190,17 @@ CalibrationSpec parse_calibration_spec(const std::string& json_text, const std::
       o.fail("window", "is required: [t0, t1] in s with 0 <= t0 < t1");
     spec.objective.window_start_s = w[0].get<double>();
     spec.objective.window_end_s = w[1].get<double>();
-    spec.objective.peak_weight = o.number("peak_weight", 0.0, 0.0, 1e6);
-    spec.objective.arrival_weight_m_per_s = o.number("arrival_weight_m_per_s", 0.0, 0.0, 1e6);
-    spec.objective.arrival_threshold_m = o.number("arrival_threshold_m", 0.005, 0.0, 1.0, true);
+    spec.objective.peak_weight = o.number("peak_weight");
+    spec.objective.arrival_weight_m_per_s = o.number("arrival_weight_m_per_s");
+    spec.objective.arrival_threshold_m = o.number("arrival_threshold_m");
     if (o.has("time_shift")) {
       Reader s = o.object("time_shift");
       FreeParameter fp;
       fp.path = kTimeShiftPath;
       fp.needs_run = false;
-      fp.lower = s.number("lower", std::nullopt, -60.0, 60.0);
-      fp.upper = s.number("upper", std::nullopt, fp.lower, 60.0, true);
-      fp.start = s.number("start", 0.0, fp.lower, fp.upper);
+      fp.lower = s.number("lower");
+      fp.upper = s.number("upper", Bounds{fp.lower, 60.0, true});
+      fp.start = s.number("start", Bounds{fp.lower, fp.upper});
       s.finish();
       spec.parameters.push_back(fp);
     }
@@ -320,27 +214,26 @@ CalibrationSpec parse_calibration_spec(const std::string& json_text, const std::
       root.fail("algorithm", "is required (an object with name and max_evaluations)");
     Reader a = root.object("algorithm");
     auto& al = spec.algorithm;
-    al.name = a.choice("name", std::nullopt, algorithm_names());
+    al.name = a.choice("name");
     if (al.name == "MLSL") {
-      al.local = a.choice("local", std::nullopt, local_names());
+      al.local = a.choice("local");
     } else if (a.has("local")) {
       a.fail("local", "is MLSL's local optimizer; " + al.name + " takes none");
     }
     if (a.has("polish")) {
       if (is_local_algorithm(al.name))
         a.fail("polish", "follows a global algorithm; " + al.name + " is local");
-      al.polish = a.choice("polish", std::nullopt, local_names());
+      al.polish = a.choice("polish");
     }
-    al.max_evaluations = static_cast<int>(a.integer("max_evaluations", -1, 1, 1000000));
-    if (al.max_evaluations < 0)
-      a.fail("max_evaluations", "is required (an integer in [1, 1000000], per start)");
-    al.polish_evaluations = static_cast<int>(a.integer("polish_evaluations", 50, 1, 1000000));
-    al.max_time_s = a.number("max_time_s", 0.0, 0.0, 1e9);
-    al.xtol_abs = a.number("xtol_abs", 1e-4, 0.0, 0.5);
-    al.ftol_abs = a.number("ftol_abs", 0.0, 0.0, 1e3);
-    al.initial_step = a.number("initial_step", 0.1, 0.0, 0.5, true);
-    al.population = static_cast<int>(a.integer("population", 0, 0, 100000));
-    al.seed = static_cast<std::uint64_t>(a.integer("seed", 1, 0, 4294967295LL));
+    if (!a.has("max_evaluations")) a.fail("max_evaluations", "is required (an integer in [1, 1000000], per start)");
+    al.max_evaluations = static_cast<int>(a.integer("max_evaluations"));
+    al.polish_evaluations = static_cast<int>(a.integer("polish_evaluations"));
+    al.max_time_s = a.number("max_time_s");
+    al.xtol_abs = a.number("xtol_abs");
+    al.ftol_abs = a.number("ftol_abs");
+    al.initial_step = a.number("initial_step");
+    al.population = static_cast<int>(a.integer("population"));
+    al.seed = static_cast<std::uint64_t>(a.integer("seed"));
     a.finish();
     const size_t dim = spec.parameters.size();
     if ((al.name == "BOBYQA" || al.polish == "BOBYQA" || al.local == "BOBYQA") && dim < 2)
@@ -358,21 +251,22 @@ CalibrationSpec parse_calibration_spec(const std::string& json_text, const std::
     std::vector<double> first;
     for (const auto& p : spec.parameters) first.push_back(p.start);
     spec.starts.push_back(first);
+    // A start's fields are the free parameters, each within its bounds, defaulting to its own start.
+    input::ObjectDoc start_doc{"starts[]", "", {}};
+    for (const auto& p : spec.parameters)
+      start_doc.fields.push_back(input::number(p.path, "start value").def(p.start).in(p.lower, p.upper));
     const json& starts = root.array("starts");
     for (size_t i = 0; i < starts.size(); ++i) {
-      Reader s(starts[i], "starts." + std::to_string(i), spec.file);
+      Reader s(starts[i], start_doc, "starts." + std::to_string(i), spec.file);
       std::vector<double> x;
-      for (const auto& p : spec.parameters) {
-        const std::string key = p.path == kTimeShiftPath ? "objective.time_shift_s" : p.path;
-        x.push_back(s.number(key, p.start, p.lower, p.upper));
-      }
+      for (const auto& p : spec.parameters) x.push_back(s.number(p.path));
       s.finish();
       spec.starts.push_back(x);
     }
     if (root.has("multi_start")) {
       Reader m = root.object("multi_start");
-      const auto count = static_cast<size_t>(m.integer("random", 0, 0, 1000));
-      const auto seed = static_cast<std::uint64_t>(m.integer("seed", 1, 0, 4294967295LL));
+      const auto count = static_cast<size_t>(m.integer("random"));
+      const auto seed = static_cast<std::uint64_t>(m.integer("seed"));
       m.finish();
       for (const auto& u : halton_points(count, spec.parameters.size(), seed)) {
         std::vector<double> x;
@@ -386,20 +280,20 @@ CalibrationSpec parse_calibration_spec(const std::string& json_text, const std::
 
   {
     Reader p = root.object("profile");
-    spec.profile.points = static_cast<int>(p.integer("points", 5, 0, 100));
-    spec.profile.span = p.number("span", 0.15, 0.0, 1.0, true);
+    spec.profile.points = static_cast<int>(p.integer("points"));
+    spec.profile.span = p.number("span");
     p.finish();
   }
   {
     Reader r = root.object("run");
-    spec.run.time_limit_s = r.number("time_limit_s", 3600.0, 0.0, 30.0 * 86400, true);
-    spec.run.threads = static_cast<int>(r.integer("threads", 1, 1, 1024));
-    spec.run.output_dir = r.string("output_dir", std::string());
+    spec.run.time_limit_s = r.number("time_limit_s");
+    spec.run.threads = static_cast<int>(r.integer("threads"));
+    spec.run.output_dir = r.string("output_dir");
     r.finish();
   }
 
   // Targets need the objective window and the simulator's gauges, so the simulator is checked first.
-  const json& targets = root.array("targets");
+  auto targets = root.objects("targets");
   root.finish();
   if (targets.empty()) root.fail("targets", "is required: a non-empty array of {file, gauges?, weight?}");
 
@@ -469,25 +363,23 @@ CalibrationSpec parse_calibration_spec(const std::string& json_text, const std::
   json target_ids = json::array();
   for (size_t i = 0; i < targets.size(); ++i) {
     const std::string field = "targets." + std::to_string(i);
-    Reader t(targets[i], field, spec.file);
+    Reader& t = targets[i];
     TargetFile tf;
-    const std::string file = t.string("file", std::nullopt);
+    const std::string file = t.string("file");
     tf.file = resolve(file, base_dir);
     if (tf.file.empty())
       t.fail("file", "cannot open '" + file + "' (looked in the current directory and next to the spec)");
-    tf.weight = t.number("weight", 1.0, 0.0, 1e6, true);
+    tf.weight = t.number("weight");
     if (t.has("gauge") && t.has("gauges"))
       t.fail("gauges", "give gauge (one column) or gauges (a map), not both");
     if (t.has("gauge")) {
-      tf.gauge_columns.emplace_back(t.string("gauge", std::nullopt), "");
+      tf.gauge_columns.emplace_back(t.string("gauge"), "");
     } else if (t.has("gauges")) {
-      Reader g = t.object("gauges");
-      for (auto it = targets[i]["gauges"].begin(); it != targets[i]["gauges"].end(); ++it) {
-        g.accept(it.key());
-        if (!it.value().is_string()) g.fail(it.key(), "must be the name of a column of " + file);
+      const json& gauges = t.map("gauges");
+      for (auto it = gauges.begin(); it != gauges.end(); ++it) {
+        if (!it.value().is_string()) t.fail("gauges." + it.key(), "must be the name of a column of " + file);
         tf.gauge_columns.emplace_back(it.key(), it.value().get<std::string>());
       }
-      g.finish();
       if (tf.gauge_columns.empty()) t.fail("gauges", "maps no gauge");
     }
     t.finish();
@@ -506,7 +398,7 @@ CalibrationSpec parse_calibration_spec(const std::string& json_text, const std::
     }
     spec.target_files.push_back(tf);
     target_ids.push_back(
-        {{"file", tf.file}, {"content", campaigns::text_hash(read_target_text(tf.file, "targets." + std::to_string(i)))}, {"spec", targets[i]}});
+        {{"file", tf.file}, {"content", campaigns::text_hash(read_target_text(tf.file, "targets." + std::to_string(i)))}, {"spec", root_json["targets"][i]}});
   }
   identity["targets"] = target_ids;
   Objective check(spec.objective, spec.targets,

@@ -16,6 +16,8 @@
 #include "campaigns/models.h"
 #include "campaigns/run_folders.h"
 #include "common/errors.h"
+#include "campaigns/spec_fields.h"
+#include "common/input/field_reader.h"
 #include "common/input/json_input.h"
 #include "solver/scene.h"
 
@@ -25,113 +27,11 @@ namespace {
 using json = nlohmann::json;
 namespace fs = std::filesystem;
 
-std::string fmt(double v) {
-  std::ostringstream s;
-  s << v;
-  return s.str();
-}
-
 using input::type_name;
 
-// A JSON object being read; finish() rejects fields nobody asked for, so a typo is an error.
-class Reader {
- public:
-  Reader(const json& j, std::string path, const std::string& file) : j_(j), path_(std::move(path)), file_(file) {
-    if (!j_.is_object()) fail("", std::string("must be an object, got ") + type_name(j_));
-  }
-  [[noreturn]] void fail(const std::string& key, const std::string& what) const {
-    throw InputError(file_, join(key), what);
-  }
-  std::string join(const std::string& key) const {
-    if (key.empty()) return path_;
-    return path_.empty() ? key : path_ + "." + key;
-  }
-  bool has(const std::string& key) const { return j_.contains(key); }
-  const json& raw(const std::string& key) {
-    used_.insert(key);
-    return j_.at(key);
-  }
-  double number(const std::string& key, std::optional<double> def, double lo = -kInf, double hi = kInf,
-                bool lo_open = false) {
-    if (!has(key)) {
-      if (!def) fail(key, "is required (a number in " + range(lo, hi, lo_open) + ")");
-      return *def;
-    }
-    const json& v = raw(key);
-    if (!v.is_number()) fail(key, std::string("must be a number, got ") + type_name(v));
-    const double x = v.get<double>();
-    if (!std::isfinite(x) || (lo_open ? !(x > lo) : !(x >= lo)) || !(x <= hi))
-      fail(key, "must be in " + range(lo, hi, lo_open) + " (got " + fmt(x) + ")");
-    return x;
-  }
-  std::int64_t integer(const std::string& key, std::optional<std::int64_t> def, std::int64_t lo, std::int64_t hi) {
-    if (!has(key)) {
-      if (!def) fail(key, "is required (an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "])");
-      return *def;
-    }
-    const json& v = raw(key);
-    if (!v.is_number() || std::floor(v.get<double>()) != v.get<double>())
-      fail(key, std::string("must be an integer, got ") + (v.is_number() ? fmt(v.get<double>()) : type_name(v)));
-    const double x = v.get<double>();
-    if (x < static_cast<double>(lo) || x > static_cast<double>(hi))
-      fail(key, "must be in [" + std::to_string(lo) + ", " + std::to_string(hi) + "] (got " + fmt(x) + ")");
-    return static_cast<std::int64_t>(x);
-  }
-  std::string string(const std::string& key, std::optional<std::string> def) {
-    if (!has(key)) {
-      if (!def) fail(key, "is required (a string)");
-      return *def;
-    }
-    const json& v = raw(key);
-    if (!v.is_string()) fail(key, std::string("must be a string, got ") + type_name(v));
-    return v.get<std::string>();
-  }
-  template <typename E>
-  E choice(const std::string& key, std::optional<E> def, const std::vector<std::pair<const char*, E>>& options) {
-    std::string allowed;
-    for (const auto& o : options) allowed += (allowed.empty() ? "" : "|") + std::string(o.first);
-    if (!has(key)) {
-      if (!def) fail(key, "is required (one of " + allowed + ")");
-      return *def;
-    }
-    const json& v = raw(key);
-    if (!v.is_string()) fail(key, "must be one of " + allowed + ", got " + type_name(v));
-    for (const auto& o : options)
-      if (v.get<std::string>() == o.first) return o.second;
-    fail(key, "must be one of " + allowed + " (got '" + v.get<std::string>() + "')");
-  }
-  Reader object(const std::string& key) {
-    static const json empty = json::object();
-    return has(key) ? Reader(raw(key), join(key), file_) : Reader(empty, join(key), file_);
-  }
-  const json& array(const std::string& key) {
-    static const json empty = json::array();
-    if (!has(key)) return empty;
-    const json& v = raw(key);
-    if (!v.is_array()) fail(key, std::string("must be an array, got ") + type_name(v));
-    return v;
-  }
-  void finish() const {
-    for (auto it = j_.begin(); it != j_.end(); ++it) {
-      if (used_.count(it.key())) continue;
-      std::string known;
-      for (const auto& k : used_) known += (known.empty() ? "" : ", ") + k;
-      fail(it.key(), "unknown field" + (known.empty() ? std::string() : " (read here: " + known + ")"));
-    }
-  }
-  void accept(const std::string& key) { used_.insert(key); }
-
- private:
-  static constexpr double kInf = std::numeric_limits<double>::infinity();
-  static std::string range(double lo, double hi, bool lo_open) {
-    auto b = [](double v) { return std::isinf(v) ? std::string(v < 0 ? "-inf" : "inf") : fmt(v); };
-    return std::string(lo_open ? "(" : "[") + b(lo) + ", " + b(hi) + (std::isinf(hi) ? ")" : "]");
-  }
-  const json& j_;
-  std::string path_;
-  const std::string& file_;
-  std::set<std::string> used_;
-};
+using Reader = input::FieldReader;
+using input::Bounds;
+constexpr double kInf = std::numeric_limits<double>::infinity();
 
 using sampling::DesignType;
 using sampling::Distribution;
@@ -139,7 +39,7 @@ using sampling::DistributionType;
 
 Distribution read_distribution(Reader& r) {
   Distribution d;
-  d.type = r.choice<DistributionType>("type", std::nullopt,
+  d.type = r.choice<DistributionType>("type",
                                       {{"uniform", DistributionType::kUniform},
                                        {"normal", DistributionType::kNormal},
                                        {"lognormal", DistributionType::kLogNormal},
@@ -148,35 +48,35 @@ Distribution read_distribution(Reader& r) {
                                        {"choice", DistributionType::kChoice}});
   switch (d.type) {
     case DistributionType::kUniform:
-      d.lower = r.number("lower", std::nullopt);
-      d.upper = r.number("upper", std::nullopt);
+      d.lower = r.number("lower");
+      d.upper = r.number("upper");
       break;
     case DistributionType::kNormal:
-      d.mean = r.number("mean", std::nullopt);
-      d.std = r.number("std", std::nullopt, 0.0, std::numeric_limits<double>::infinity(), true);
+      d.mean = r.number("mean");
+      d.std = r.number("std");
       break;
     case DistributionType::kLogNormal:
       if (r.has("mu_log") || r.has("sigma_log")) {
-        d.mu_log = r.number("mu_log", std::nullopt);
-        d.sigma_log = r.number("sigma_log", std::nullopt, 0.0, std::numeric_limits<double>::infinity(), true);
+        d.mu_log = r.number("mu_log");
+        d.sigma_log = r.number("sigma_log");
       } else {
         if (!r.has("mean")) r.fail("mean", "is required (a lognormal takes mean and std of the variable, or mu_log and sigma_log)");
-        const double mean = r.number("mean", std::nullopt, 0.0, std::numeric_limits<double>::infinity(), true);
-        const double std = r.number("std", std::nullopt, 0.0, std::numeric_limits<double>::infinity(), true);
+        const double mean = r.number("mean", Bounds{0.0, kInf, true, true});
+        const double std = r.number("std");
         d = sampling::lognormal_from_mean_std(mean, std);
       }
       break;
     case DistributionType::kTruncatedNormal:
-      d.mean = r.number("mean", std::nullopt);
-      d.std = r.number("std", std::nullopt, 0.0, std::numeric_limits<double>::infinity(), true);
-      d.lower = r.number("lower", std::nullopt);
-      d.upper = r.number("upper", std::nullopt);
+      d.mean = r.number("mean");
+      d.std = r.number("std");
+      d.lower = r.number("lower");
+      d.upper = r.number("upper");
       break;
     case DistributionType::kBeta:
-      d.alpha = r.number("alpha", std::nullopt, 0.0, std::numeric_limits<double>::infinity(), true);
-      d.beta = r.number("beta", std::nullopt, 0.0, std::numeric_limits<double>::infinity(), true);
-      d.lower = r.number("lower", 0.0);
-      d.upper = r.number("upper", 1.0);
+      d.alpha = r.number("alpha");
+      d.beta = r.number("beta");
+      d.lower = r.number_or("lower", 0.0);
+      d.upper = r.number_or("upper", 1.0);
       break;
     case DistributionType::kChoice: {
       const json& values = r.array("values");
@@ -276,12 +176,15 @@ void read_list_design(Reader& d, const json& design_json, CampaignSpec& spec, co
   std::vector<std::map<std::string, json>> given(points.size());
   std::set<std::string> labels;
   for (size_t i = 0; i < points.size(); ++i) {
-    Reader p(points[i], "design.points." + std::to_string(i), spec.file);
+    // A point: a label and scene paths (free keys); the reference describes it in design.points.
+    static const input::ObjectDoc point_doc{
+        "design.points[]", "", {input::string("label", "the point's name in tables and plots")}, true};
+    Reader p(points[i], point_doc, "design.points." + std::to_string(i), spec.file);
     std::string label, scene;
     for (auto it = design_json["points"][i].begin(); it != design_json["points"][i].end(); ++it) {
       const std::string& key = it.key();
       if (key == "label") {
-        label = p.string("label", std::nullopt);
+        label = p.string_or("label", "");
         if (!labels.insert(label).second) p.fail("label", "'" + label + "' is already the label of another point");
         continue;
       }
@@ -446,9 +349,9 @@ static void read_parameters(Reader& root, const json& root_json, CampaignSpec& s
   (void)root_json;
   std::set<std::string> paths;
   for (size_t i = 0; i < params.size(); ++i) {
-    Reader p(params[i], "parameters." + std::to_string(i), spec.file);
+    Reader p(params[i], *campaign_doc().find("parameters")->object, "parameters." + std::to_string(i), spec.file);
     ParameterSpec ps;
-    ps.path = p.string("path", std::nullopt);
+    ps.path = p.string("path");
     if (ps.path.empty()) p.fail("path", "must not be empty");
     if (!paths.insert(ps.path).second) p.fail("path", "'" + ps.path + "' is already a parameter");
     for (const auto& [path, value] : spec.overrides)
@@ -463,7 +366,7 @@ static void read_parameters(Reader& root, const json& root_json, CampaignSpec& s
   const json& corr = root.array("correlation");
   if (spec.listed && !corr.empty()) root.fail("correlation", "must be absent with a list design");
   for (size_t i = 0; i < corr.size(); ++i) {
-    Reader c(corr[i], "correlation." + std::to_string(i), spec.file);
+    Reader c(corr[i], *campaign_doc().find("correlation")->object, "correlation." + std::to_string(i), spec.file);
     const json& pair = c.array("parameters");
     if (pair.size() != 2 || !pair[0].is_string() || !pair[1].is_string())
       c.fail("parameters", "must be an array of two parameter paths");
@@ -476,7 +379,7 @@ static void read_parameters(Reader& root, const json& root_json, CampaignSpec& s
     rc.a = index_of(pair[0].get<std::string>(), 0);
     rc.b = index_of(pair[1].get<std::string>(), 1);
     if (rc.a == rc.b) c.fail("parameters", "must name two different parameters");
-    rc.rho = c.number("rank", std::nullopt, -0.99, 0.99);
+    rc.rho = c.number("rank");
     c.finish();
     spec.correlations.push_back(rc);
   }
@@ -488,37 +391,26 @@ CampaignSpec parse_campaign_spec(const std::string& json_text, const std::string
   const json root_json = input::parse_json_document(json_text, file_label);
   CampaignSpec spec;
   spec.file = file_label;
-  Reader root(root_json, "", spec.file);
-  spec.name = root.string("name", std::nullopt);
+  Reader root(root_json, campaign_doc(), "", spec.file);
+  spec.name = root.string("name");
   if (const std::string problem = campaign_name_problem(spec.name); !problem.empty()) root.fail("name", problem);
-  spec.description = root.string("description", std::string());
+  spec.description = root.string("description");
 
   if (root.has("scene") == root.has("model"))
     root.fail(root.has("scene") ? "model" : "scene", "exactly one of scene (a scene file) and model (" +
                                                           std::string("ishigami|test") + ") is required");
   if (root.has("scene")) {
-    const std::string scene = root.string("scene", std::nullopt);
+    const std::string scene = root.string("scene");
     spec.scene = resolve_scene(scene, base_dir);
     if (spec.scene.empty())
       root.fail("scene", "cannot open '" + scene + "' (looked in the current directory and next to the spec)");
   } else {
-    spec.model = root.string("model", std::nullopt);
-    if (model_inputs(spec.model).empty()) {
-      std::string names;
-      for (const auto& n : model_names()) names += (names.empty() ? "" : "|") + n;
-      root.fail("model", "must be one of " + names + " (got '" + spec.model + "')");
-    }
+    spec.model = root.choice("model");
   }
 
   {
-    Reader o = root.object("overrides");
-    if (root.has("overrides")) {
-      for (auto it = root_json["overrides"].begin(); it != root_json["overrides"].end(); ++it) {
-        o.accept(it.key());
-        spec.overrides.emplace_back(it.key(), it.value().dump());
-      }
-    }
-    o.finish();
+    const json& overrides = root.map("overrides");
+    for (auto it = overrides.begin(); it != overrides.end(); ++it) spec.overrides.emplace_back(it.key(), it.value().dump());
   }
 
   spec.listed = root_json.contains("design") && root_json["design"].is_object() &&
@@ -540,7 +432,7 @@ CampaignSpec parse_campaign_spec(const std::string& json_text, const std::string
                                                                    {"one_at_a_time", DesignType::kOneAtATime},
                                                                    {"saltelli", DesignType::kSaltelli},
                                                                    {"list", DesignType::kMonteCarlo}};
-    spec.design.type = d.choice<DesignType>("type", std::nullopt, types);
+    spec.design.type = d.choice<DesignType>("type", types);
     const auto t = spec.design.type;
     const bool needs_samples = t == DesignType::kMonteCarlo || t == DesignType::kLatinHypercube ||
                                t == DesignType::kSobol || t == DesignType::kSaltelli ||
@@ -549,12 +441,13 @@ CampaignSpec parse_campaign_spec(const std::string& json_text, const std::string
                                   return p.distribution.type != sampling::DistributionType::kChoice;
                                 }));
     if (needs_samples || d.has("samples"))
-      spec.design.samples = static_cast<size_t>(d.integer("samples", std::nullopt, 1, 10000000));
+      spec.design.samples = static_cast<size_t>(d.integer("samples"));
     if (t == DesignType::kGrid || t == DesignType::kOneAtATime) {
-      spec.design.levels = static_cast<size_t>(d.integer("levels", t == DesignType::kGrid ? 0 : 1, t == DesignType::kGrid ? 2 : 1, 1000));
+      spec.design.levels = static_cast<size_t>(d.integer_or("levels", t == DesignType::kGrid ? 0 : 1,
+                                                              std::pair<long long, long long>(t == DesignType::kGrid ? 2 : 1, 1000)));
     }
     if (t == DesignType::kSaltelli)
-      spec.design.saltelli_base = d.choice<DesignType>("base", DesignType::kMonteCarlo,
+      spec.design.saltelli_base = d.choice<DesignType>("base",
                                                        {{"monte_carlo", DesignType::kMonteCarlo},
                                                         {"lhs", DesignType::kLatinHypercube},
                                                         {"sobol", DesignType::kSobol}});
@@ -568,16 +461,15 @@ CampaignSpec parse_campaign_spec(const std::string& json_text, const std::string
     if (n > 10000000) d.fail("samples", "gives " + std::to_string(n) + " runs; at most 10000000 are allowed");
   }
 
-  spec.seed = static_cast<std::uint64_t>(
-      root.integer("seed", spec.listed ? std::optional<std::int64_t>(0) : std::nullopt, 0, 4294967295LL));
+  spec.seed = static_cast<std::uint64_t>(spec.listed ? root.integer_or("seed", 0) : root.integer("seed"));
 
   {
     Reader r = root.object("run");
-    spec.run.time_limit_s = r.number("time_limit_s", 3600.0, 0.0, 30.0 * 86400, true);
-    spec.run.threads = static_cast<int>(r.integer("threads", 1, 1, 1024));
-    spec.run.memory_limit_mb = r.number("memory_limit_mb", 0.0, 0.0, 1e9);
-    spec.run.output_dir = r.string("output_dir", std::string());
-    spec.run.checkpoint_every_s = r.number("checkpoint_every_s", 0.0, 0.0, 1e7);
+    spec.run.time_limit_s = r.number("time_limit_s");
+    spec.run.threads = static_cast<int>(r.integer("threads"));
+    spec.run.memory_limit_mb = r.number("memory_limit_mb");
+    spec.run.output_dir = r.string("output_dir");
+    spec.run.checkpoint_every_s = r.number("checkpoint_every_s");
     if (spec.run.checkpoint_every_s > 0 && spec.run.checkpoint_every_s < 1)
       r.fail("checkpoint_every_s", "must be 0 (no checkpoints) or in [1, 1e7] wall-clock seconds");
     r.finish();
@@ -616,7 +508,7 @@ CampaignSpec parse_spec_parameters(const std::string& json_text, const std::stri
   CampaignSpec spec;
   spec.file = file_label;
   const json root_json = input::parse_json_document(json_text, file_label);
-  Reader root(root_json, "", spec.file);
+  Reader root(root_json, campaign_doc(), "", spec.file);
   spec.listed = root_json.contains("design") && root_json["design"].is_object() &&
                 root_json["design"].contains("type") && root_json["design"]["type"] == "list";
   if (root_json.contains("model") && root_json["model"].is_string()) spec.model = root_json["model"];

@@ -1,6 +1,7 @@
 #include "cli/registry.h"
 
 #include "calibration/commands.h"
+#include "cli/schema.h"
 #include "campaigns/commands.h"
 #include "report/export.h"
 #include "report/gauges.h"
@@ -27,6 +28,8 @@ const std::vector<Command>& commands() {
       {"model", "analytic stand-ins for `flume run` (campaign tests)", add_model_command, nullptr},
       {"study", "error against cost over fidelity settings, Pareto front", study::add_study_command, nullptr},
       {"calibrate", "fit scene parameters to measured gauges", calibration::add_calibrate_command, nullptr},
+      {"schema", "JSON Schema or Markdown reference of the scene, campaign, calibration and study files",
+       add_schema_command, nullptr},
       {"surrogate", "polynomial chaos and kriging surrogates of a campaign's runs, Sobol' indices, posteriors",
        nullptr, surrogate_main},
   };

@@ -11,8 +11,10 @@
 #include <sstream>
 
 #include "common/errors.h"
+#include "common/input/field_reader.h"
 #include "common/input/json_input.h"
 #include "solver/inflow.h"
+#include "solver/scene_fields.h"
 
 namespace flume {
 namespace {
@@ -27,158 +29,17 @@ std::string fmt(double v) {
 
 using input::type_name;
 
-// A JSON object being read: each accessor marks its key as used, and finish() rejects the rest, so a
-// misspelt field is an error rather than a silently ignored default.
-class Reader {
- public:
-  Reader(const json& j, std::string path, const std::string& file) : j_(j), path_(std::move(path)), file_(file) {
-    if (!j_.is_object()) fail("", std::string("must be an object, got ") + type_name(j_));
-  }
-
-  [[noreturn]] void fail(const std::string& key, const std::string& what) const {
-    throw InputError(file_, join(key), what);
-  }
-  std::string join(const std::string& key) const {
-    if (key.empty()) return path_;
-    return path_.empty() ? key : path_ + "." + key;
-  }
-  // Every accessor asks has() first, so `known_` collects every field this object may hold, present or not:
-  // finish() lists them all, so a typo's message shows the intended name even when it was left out.
-  bool has(const std::string& key) const {
-    known_.insert(key);
-    return j_.contains(key);
-  }
-  const json& raw(const std::string& key) {
-    used_.insert(key);
-    known_.insert(key);
-    return j_.at(key);
-  }
-
-  // A number in [lo, hi]; `lo_open`/`hi_open` exclude the end.
-  double number(const std::string& key, std::optional<double> def, double lo, double hi, bool lo_open = false,
-                bool hi_open = false) {
-    if (!has(key)) {
-      if (!def) fail(key, "is required (a number in " + range(lo, hi, lo_open, hi_open) + ")");
-      return *def;
-    }
-    const json& v = raw(key);
-    if (!v.is_number()) fail(key, std::string("must be a number, got ") + type_name(v));
-    const double x = v.get<double>();
-    const bool ok = std::isfinite(x) && (lo_open ? x > lo : x >= lo) && (hi_open ? x < hi : x <= hi);
-    if (!ok) fail(key, "must be in " + range(lo, hi, lo_open, hi_open) + " (got " + fmt(x) + ")");
-    return x;
-  }
-  int integer(const std::string& key, std::optional<int> def, int lo, int hi) {
-    if (!has(key)) {
-      if (!def) fail(key, "is required (an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "])");
-      return *def;
-    }
-    const json& v = raw(key);
-    if (!v.is_number_integer() && !(v.is_number() && std::floor(v.get<double>()) == v.get<double>()))
-      fail(key, std::string("must be an integer, got ") + (v.is_number() ? fmt(v.get<double>()) : type_name(v)));
-    const double x = v.get<double>();
-    if (x < lo || x > hi)
-      fail(key, "must be in [" + std::to_string(lo) + ", " + std::to_string(hi) + "] (got " + fmt(x) + ")");
-    return static_cast<int>(x);
-  }
-  bool boolean(const std::string& key, std::optional<bool> def) {
-    if (!has(key)) {
-      if (!def) fail(key, "is required (true or false)");
-      return *def;
-    }
-    const json& v = raw(key);
-    if (!v.is_boolean()) fail(key, std::string("must be true or false, got ") + type_name(v));
-    return v.get<bool>();
-  }
-  std::string string(const std::string& key, std::optional<std::string> def) {
-    if (!has(key)) {
-      if (!def) fail(key, "is required (a string)");
-      return *def;
-    }
-    const json& v = raw(key);
-    if (!v.is_string()) fail(key, std::string("must be a string, got ") + type_name(v));
-    return v.get<std::string>();
-  }
-  template <typename E>
-  E choice(const std::string& key, std::optional<E> def, const std::vector<std::pair<const char*, E>>& options) {
-    std::string allowed;
-    for (const auto& o : options) allowed += (allowed.empty() ? "" : "|") + std::string(o.first);
-    if (!has(key)) {
-      if (!def) fail(key, "is required (one of " + allowed + ")");
-      return *def;
-    }
-    const json& v = raw(key);
-    if (!v.is_string()) fail(key, "must be one of " + allowed + ", got " + type_name(v));
-    for (const auto& o : options)
-      if (v.get<std::string>() == o.first) return o.second;
-    fail(key, "must be one of " + allowed + " (got '" + v.get<std::string>() + "')");
-  }
-  // A vector of `dim` finite numbers.
-  Vec3d vec(const std::string& key, int dim, std::optional<Vec3d> def = std::nullopt) {
-    if (!has(key)) {
-      if (!def) fail(key, "is required (an array of " + std::to_string(dim) + " numbers)");
-      return *def;
-    }
-    const json& v = raw(key);
-    if (!v.is_array() || static_cast<int>(v.size()) != dim)
-      fail(key, "must be an array of " + std::to_string(dim) + " numbers (the scene's dimension)");
-    Vec3d out{};
-    for (int i = 0; i < dim; ++i) {
-      if (!v[i].is_number() || !std::isfinite(v[i].get<double>()))
-        fail(key + "." + std::to_string(i), "must be a finite number");
-      out[i] = v[i].get<double>();
-    }
-    return out;
-  }
-  Reader object(const std::string& key) {
-    static const json empty = json::object();
-    return has(key) ? Reader(raw(key), join(key), file_) : Reader(empty, join(key), file_);
-  }
-  // Elements of an array of objects (absent means empty).
-  std::vector<Reader> array(const std::string& key) {
-    std::vector<Reader> out;
-    if (!has(key)) return out;
-    const json& v = raw(key);
-    if (!v.is_array()) fail(key, std::string("must be an array, got ") + type_name(v));
-    for (size_t i = 0; i < v.size(); ++i) out.emplace_back(v[i], join(key) + "." + std::to_string(i), file_);
-    return out;
-  }
-  void finish() const {
-    for (auto it = j_.begin(); it != j_.end(); ++it) {
-      if (used_.count(it.key())) continue;
-      std::string allowed;
-      for (const auto& k : known_) allowed += (allowed.empty() ? "" : ", ") + k;
-      fail(it.key(), "unknown field" + (allowed.empty() ? std::string() : " (known here: " + allowed + ")"));
-    }
-  }
-  const std::string& path() const { return path_; }
-  const std::string& file() const { return file_; }
-
-  // Marks keys as known without reading them (for fields read by a later pass).
-  void accept(const std::string& key) {
-    used_.insert(key);
-    known_.insert(key);
-  }
-
- private:
-  static std::string range(double lo, double hi, bool lo_open, bool hi_open) {
-    auto b = [](double v) { return std::isinf(v) ? std::string(v < 0 ? "-inf" : "inf") : fmt(v); };
-    return std::string(lo_open ? "(" : "[") + b(lo) + ", " + b(hi) + (hi_open ? ")" : "]");
-  }
-  const json& j_;
-  std::string path_;
-  const std::string& file_;
-  std::set<std::string> used_;
-  mutable std::set<std::string> known_;
-};
+using Reader = input::FieldReader;
+using input::Bounds;
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr std::size_t kMaxSceneJsonBytes = 60000;
 
 // What the solver allocates from a scene, bounded before it is (docs/reliability.md, "Input limits"): the
 // particles its water boxes seed and the cells across its domain.
-constexpr int kDefaultMaxParticles = 100000000;   // ~25 GB in double precision in 3D: a large GPU node
-constexpr int kHardMaxParticles = 2000000000;     // within the int the field is read into
+// solver.max_particles: default 1e8 (~25 GB in double precision in 3D: a large GPU node), at most this, within the
+// int the field is read into (scene_fields.cpp).
+constexpr int kHardMaxParticles = 2000000000;
 constexpr double kMaxCellsPerAxis = 4.0e6;         // block keys pack 21 bits per axis (2^21 blocks of 4 cells)
 
 // Particles seeded per box (seed_water in solver/seeding.h: lround(L / spacing) per axis, at least 1), in
@@ -220,7 +81,7 @@ void check_allocation_bounds(const Scene& sc, Reader& root, int dim) {
 
 Shape read_shape(Reader& r, int dim) {
   Shape s;
-  s.type = r.choice<ShapeType>("type", std::nullopt, {{"box", ShapeType::kBox}, {"half_space", ShapeType::kHalfSpace}});
+  s.type = r.choice<ShapeType>("type", {{"box", ShapeType::kBox}, {"half_space", ShapeType::kHalfSpace}});
   if (s.type == ShapeType::kBox) {
     s.lo = r.vec("lo", dim);
     s.hi = r.vec("hi", dim);
@@ -281,21 +142,20 @@ Basin read_basin(const json& root, const std::string& file, int dim) {
   static const json empty = json::object();
   Basin B;
   B.present = true;
-  Reader b(root.at("basin"), "basin", file);
-  B.span = b.choice<std::string>("span", std::string(dim == 2 ? "slice" : "full"),
-                                 {{"full", "full"}, {"half", "half"}, {"slice", "slice"}});
+  Reader b(root.at("basin"), basin_doc(), "basin", file);
+  B.span = b.choice_or("span", dim == 2 ? "slice" : "full");
   if ((B.span == "slice") != (dim == 2))
     b.fail("span", dim == 2 ? "must be slice in a 2D scene" : "must be full or half in a 3D scene (slice is 2D)");
-  B.still_water_m = b.number("still_water_m", 0.23, 0.0, 10.0, true, false);
-  B.quay_x_m = b.number("quay_x_m", 4.45, 0.5, 1000.0);
-  B.apron_height_m = b.number("apron_height_m", 0.255, 0.0, 10.0);
-  B.length_m = b.number("length_m", 9.0, B.quay_x_m, 1000.0, true, false);
-  B.width_m = b.number("width_m", 4.0, 0.0, 1000.0, true, false);
-  B.slice_y_m = b.number("slice_y_m", B.width_m / 2, 0.0, B.width_m);
-  b.choice<std::string>("walls", std::string("slip"), {{"sticky", "sticky"}, {"slip", "slip"}, {"separate", "separate"}});
-  b.number("wall_friction", 0.0, 0.0, 10.0);
-  b.choice<std::string>("instruments", std::string("waseda"), {{"waseda", "waseda"}, {"none", "none"}});
-  B.region = b.choice<std::string>("region", std::string("basin"), {{"basin", "basin"}, {"apron", "apron"}});
+  B.still_water_m = b.number("still_water_m");
+  B.quay_x_m = b.number("quay_x_m");
+  B.apron_height_m = b.number("apron_height_m");
+  B.length_m = b.number("length_m", Bounds{B.quay_x_m, 1000.0, true, false});
+  B.width_m = b.number("width_m");
+  B.slice_y_m = b.number_or("slice_y_m", B.width_m / 2, Bounds{0.0, B.width_m});
+  b.choice("walls");
+  b.number("wall_friction");
+  b.choice("instruments");
+  B.region = b.choice("region");
   b.finish();
   if (B.region == "apron") {
     // The apron alone (issue 3): the basin downstream of inflow.x_m, driven by the inflow's replay of a section
@@ -307,21 +167,21 @@ Basin read_basin(const json& root, const std::string& file, int dim) {
       throw InputError(file, "reservoir", "the apron region has no reservoir (the inflow drives it): remove this section");
   }
 
-  Reader r(root.contains("reservoir") ? root.at("reservoir") : empty, "reservoir", file);
-  B.reservoir_length_m = r.number("length_m", 0.50, 0.0, B.quay_x_m, true, true);
-  B.gate_thickness_m = r.number("gate_thickness_m", 0.04, 0.0, 1.0, true, false);
-  B.fill_level_m = r.number("fill_level_m", 0.90, B.still_water_m, 100.0);
-  B.gate_height_m = r.number("gate_height_m", 0.10, 0.0, B.fill_level_m, true, false);
+  Reader r(root.contains("reservoir") ? root.at("reservoir") : empty, reservoir_doc(), "reservoir", file);
+  B.reservoir_length_m = r.number("length_m", Bounds{0.0, B.quay_x_m, true, true});
+  B.gate_thickness_m = r.number("gate_thickness_m");
+  B.fill_level_m = r.number("fill_level_m", Bounds{B.still_water_m, 100.0});
+  B.gate_height_m = r.number("gate_height_m", Bounds{0.0, B.fill_level_m, true, false});
   if (B.reservoir_length_m + B.gate_thickness_m >= B.quay_x_m)
     r.fail("length_m", "the reservoir and gate must end before the quay at x = " + fmt(B.quay_x_m));
   {
     Reader f = r.object("forcing");
     auto& F = B.forcing;
-    F.model = f.choice<ForcingModel>("model", ForcingModel::kNone,
+    F.model = f.choice<ForcingModel>("model",
                                      {{"none", ForcingModel::kNone},
                                       {"exponential", ForcingModel::kExponential},
                                       {"table", ForcingModel::kTable}});
-    F.t99_s = f.number("t99_s", 1.0, 0.0, 1000.0);
+    F.t99_s = f.number("t99_s");
     if (f.has("table")) {
       const json& t = f.raw("table");
       auto bad = [&](const std::string& at, const std::string& what) { f.fail("table" + at, what); };
@@ -345,12 +205,12 @@ Basin read_basin(const json& root, const std::string& file, int dim) {
   }
   r.finish();
 
-  Reader o(root.contains("obstacles") ? root.at("obstacles") : empty, "obstacles", file);
-  B.obstacles_layout = o.choice<std::string>("layout", std::string("0x0"), {{"0x0", "0x0"}, {"5x1", "5x1"}, {"5x2", "5x2"}});
-  o.number("size_m", 0.10, 0.0, 10.0, true, false);
-  o.number("spacing_m", 0.325, 0.0, 100.0, true, false);
-  o.number("row_spacing_m", 0.45, 0.0, 100.0, true, false);
-  o.number("first_row_x_m", 5.11, B.quay_x_m, B.length_m);
+  Reader o(root.contains("obstacles") ? root.at("obstacles") : empty, obstacles_doc(), "obstacles", file);
+  B.obstacles_layout = o.choice("layout");
+  o.number("size_m");
+  o.number("spacing_m");
+  o.number("row_spacing_m");
+  o.number("first_row_x_m", Bounds{B.quay_x_m, B.length_m});
   o.finish();
   return B;
 }
@@ -511,16 +371,15 @@ void expand_debris_layout(json& root, Basin& B, DebrisSettings& layout, const st
   json& d = root["debris"];
   if (!d.is_object()) throw InputError(file, "debris", std::string("must be an object, got ") + type_name(d));
   if (d.contains("bodies")) return;  // listed by hand
-  Reader r(d, "debris", file);
+  Reader r(d, debris_doc(), "debris", file);
   if (dim != 3) r.fail("", "debris need a 3D scene (the rigid bodies are 3D): use waseda_3d or remove `debris`");
   if (B.span == "half")
     r.fail("", "the debris layout is not mirror-symmetric about the centreline: use basin.span = full");
-  layout.count = r.integer("count", 6, 3, 6);
+  layout.count = static_cast<int>(r.integer("count"));
   if (layout.count != 3 && layout.count != 6) r.fail("count", "must be 3 or 6 (got " + std::to_string(layout.count) + ")");
-  layout.layers = r.integer("layers", layout.count == 6 ? 2 : 1, 1, 2);
+  layout.layers = static_cast<int>(r.integer_or("layers", layout.count == 6 ? 2 : 1));
   if (layout.count == 3 && layout.layers != 1) r.fail("layers", "must be 1 when count is 3 (three containers make one layer)");
-  layout.placement = r.choice<std::string>("placement", std::string("upstream"),
-                                           {{"upstream", "upstream"}, {"downstream", "downstream"}});
+  layout.placement = r.choice("placement");
   // Downstream: 0.30 m past the last obstacle row's downstream face (the study gives no position; an
   // assumption, stated in docs/debris.md).
   const json& os = root.contains("obstacles") ? root.at("obstacles") : json::object();
@@ -528,11 +387,11 @@ void expand_debris_layout(json& root, Basin& B, DebrisSettings& layout, const st
   const double obstacle_end = os.value("first_row_x_m", 5.11) +
                               (rows > 0 ? (rows - 1) * os.value("row_spacing_m", 0.45) + os.value("size_m", 0.10) : 0.0);
   const double default_x = layout.placement == "upstream" ? 4.65 : obstacle_end + 0.30;
-  layout.row_x_m = r.number("row_x_m", default_x, B.quay_x_m, B.length_m);
+  layout.row_x_m = r.number_or("row_x_m", default_x, Bounds{B.quay_x_m, B.length_m});
   const Vec3d size = r.vec("size_m", 3, Vec3d{0.06, 0.15, 0.06});
   for (int a = 0; a < 3; ++a)
     if (!(size[a] > 0)) r.fail("size_m", "edge lengths must be > 0");
-  const double gap = r.number("gap_m", 0.03, 0.0, 1.0);
+  const double gap = r.number("gap_m");
   for (const char* k : {"friction", "restitution", "density", "resample_hz", "record_rate_hz", "rest_speed_m_s",
                         "rest_hold_s"})
     if (r.has(k)) r.accept(k);
@@ -572,9 +431,9 @@ double ReservoirForcing_hold(const ReservoirForcing& F, double t) {
 Scene parse(const json& root_json, const std::string& file) {
   Scene sc;
   sc.file = file;
-  Reader root(root_json, "", file);
-  sc.name = root.string("name", std::string("scene"));
-  sc.dimension = root.integer("dimension", std::nullopt, 2, 3);
+  Reader root(root_json, scene_doc(), "", file);
+  sc.name = root.string("name");
+  sc.dimension = static_cast<int>(root.integer("dimension"));
   const int dim = sc.dimension;
   const int up = dim - 1;
 
@@ -585,34 +444,34 @@ Scene parse(const json& root_json, const std::string& file) {
     sc.domain_hi = r.vec("hi", dim);
     for (int d = 0; d < dim; ++d)
       if (!(sc.domain_hi[d] > sc.domain_lo[d])) r.fail("hi", "must exceed domain.lo on every axis");
-    sc.domain_walls = r.choice<BoundaryCondition>("walls", BoundaryCondition::kSeparate,
+    sc.domain_walls = r.choice<BoundaryCondition>("walls",
                                                   {{"sticky", BoundaryCondition::kSticky},
                                                    {"slip", BoundaryCondition::kSlip},
                                                    {"separate", BoundaryCondition::kSeparate}});
-    sc.domain_wall_friction = r.number("friction", 0.0, 0.0, 10.0);
+    sc.domain_wall_friction = r.number("friction");
     r.finish();
   }
 
   {
     Reader r = root.object("solver");
     auto& s = sc.solver;
-    s.method = r.choice<SolverMethod>("method", SolverMethod::kMpm, {{"mpm", SolverMethod::kMpm}, {"sph", SolverMethod::kSph}});
+    s.method = r.choice<SolverMethod>("method", {{"mpm", SolverMethod::kMpm}, {"sph", SolverMethod::kSph}});
     double min_extent = kInf;
     for (int d = 0; d < dim; ++d) min_extent = std::min(min_extent, sc.domain_hi[d] - sc.domain_lo[d]);
-    s.dx = r.number("dx", std::nullopt, 0.0, min_extent / 4, true, false);
-    s.ppc = r.integer("ppc", dim == 2 ? 4 : 8, 1, 64);
-    s.max_particles = r.integer("max_particles", kDefaultMaxParticles, 1, kHardMaxParticles);
+    s.dx = r.number("dx", Bounds{0.0, min_extent / 4, true, false});
+    s.ppc = static_cast<int>(r.integer_or("ppc", dim == 2 ? 4 : 8));
+    s.max_particles = static_cast<int>(r.integer("max_particles"));
     const int per_axis = static_cast<int>(std::lround(std::pow(s.ppc, 1.0 / dim)));
     int p = 1;
     for (int d = 0; d < dim; ++d) p *= per_axis;
     if (p != s.ppc)
       r.fail("ppc", std::string("must be a perfect ") + (dim == 2 ? "square (1, 4, 9, 16, ...)" : "cube (1, 8, 27, 64)") +
                         " so particles sit on a regular lattice (got " + std::to_string(s.ppc) + ")");
-    s.cfl = r.number("cfl", 0.4, 0.0, 10.0, true, false);
-    s.precision = r.choice<Precision>("precision", Precision::kDouble,
+    s.cfl = r.number("cfl");
+    s.precision = r.choice<Precision>("precision",
                                       {{"float", Precision::kFloat}, {"double", Precision::kDouble}});
-    s.end_time = r.number("end_time", std::nullopt, 0.0, 1e6, true, false);
-    s.max_dt = r.number("max_dt", 1e-3, 0.0, 1.0, true, false);
+    s.end_time = r.number("end_time");
+    s.max_dt = r.number("max_dt");
     Vec3d g{};
     g[up] = -9.80665;
     s.gravity = r.vec("gravity", dim, g);
@@ -622,40 +481,40 @@ Scene parse(const json& root_json, const std::string& file) {
   {
     Reader r = root.object("sph");
     auto& p = sc.sph;
-    p.coefh = r.number("coefh", 1.0, 0.5, 2.0);
-    p.cfl = r.number("cfl", 0.2, 0.0, 0.5, true, false);
-    p.density_diffusion = r.number("density_diffusion", 0.1, 0.0, 1.0);
-    p.viscosity = r.choice<SphViscosity>("viscosity", SphViscosity::kLaminarSps,
+    p.coefh = r.number("coefh");
+    p.cfl = r.number("cfl");
+    p.density_diffusion = r.number("density_diffusion");
+    p.viscosity = r.choice<SphViscosity>("viscosity",
                                          {{"laminar_sps", SphViscosity::kLaminarSps}, {"artificial", SphViscosity::kArtificial}});
-    p.artificial_alpha = r.number("artificial_alpha", 0.01, 0.0, 1.0);
+    p.artificial_alpha = r.number("artificial_alpha");
     r.finish();
   }
 
   {
     Reader r = root.object("fluid");
     auto& f = sc.fluid;
-    f.density = r.number("density", 1000.0, 0.0, 1e5, true, false);
-    f.bulk_modulus = r.number("bulk_modulus", 2.0e7, 0.0, 1e11, true, false);
-    f.gamma = r.number("gamma", 7.0, 1.0, 20.0);
-    f.viscosity = r.number("viscosity", 1.0e-3, 0.0, 1e3);
-    f.jbar_psi = r.number("jbar_psi", 0.0, 0.0, 1.0);
+    f.density = r.number("density");
+    f.bulk_modulus = r.number("bulk_modulus");
+    f.gamma = r.number("gamma");
+    f.viscosity = r.number("viscosity");
+    f.jbar_psi = r.number("jbar_psi");
     r.finish();
   }
 
   {
-    auto walls = root.array("boundaries");
+    auto walls = root.objects("boundaries");
     std::set<std::string> names;
     for (auto& r : walls) {
       Boundary b;
-      b.name = r.string("name", "boundary" + std::to_string(sc.boundaries.size()));
+      b.name = r.string_or("name", "boundary" + std::to_string(sc.boundaries.size()));
       if (!names.insert(b.name).second) r.fail("name", "duplicate boundary name '" + b.name + "'");
       b.shape = read_shape(r, dim);
-      b.condition = r.choice<BoundaryCondition>("condition", BoundaryCondition::kSeparate,
+      b.condition = r.choice<BoundaryCondition>("condition",
                                                 {{"sticky", BoundaryCondition::kSticky},
                                                  {"slip", BoundaryCondition::kSlip},
                                                  {"separate", BoundaryCondition::kSeparate},
                                                  {"symmetry", BoundaryCondition::kSymmetry}});
-      b.friction = r.number("friction", 0.0, 0.0, 10.0);
+      b.friction = r.number("friction");
       b.velocity = r.vec("velocity", dim, Vec3d{});
       // Axes across which a box's faces act below a cell (mpm::subcell_cover), e.g. the gate's opening: [0..dim).
       if (r.has("subcell_axes")) {
@@ -698,12 +557,11 @@ Scene parse(const json& root_json, const std::string& file) {
   }
 
   {
-    auto regions = root.array("water");
+    auto regions = root.objects("water");
     if (regions.empty()) root.fail("water", "is required: a non-empty array of boxes {lo, hi}");
     for (auto& r : regions) {
       WaterRegion w;
-      const std::string type = r.string("type", std::string("box"));
-      if (type != "box") r.fail("type", "must be box (got '" + type + "')");
+      r.choice("type");  // box, the only shape
       w.lo = r.vec("lo", dim);
       w.hi = r.vec("hi", dim);
       for (int d = 0; d < dim; ++d) {
@@ -718,8 +576,8 @@ Scene parse(const json& root_json, const std::string& file) {
       }
       // Initial pressure: hydrostatic below a free surface (default: the region's top), so that water at rest
       // starts in equilibrium instead of falling onto its own compression and ringing acoustically.
-      w.hydrostatic = r.boolean("hydrostatic", true);
-      w.surface = r.number("surface", w.hi[dim - 1], w.lo[dim - 1], 1e6);
+      w.hydrostatic = r.boolean("hydrostatic");
+      w.surface = r.number_or("surface", w.hi[dim - 1], Bounds{w.lo[dim - 1], 1e6});
       // Water placed inside a solid would be expelled violently at t = 0: forbidden.
       for (const auto& b : sc.boundaries)
         if (solid_overlaps_box(b.shape, w.lo, w.hi, dim, 0.25 * sc.solver.dx))
@@ -743,50 +601,50 @@ Scene parse(const json& root_json, const std::string& file) {
           r.fail(key, "must lie inside the domain on axis " + std::to_string(d) + " ([" + fmt(sc.domain_lo[d]) +
                           ", " + fmt(sc.domain_hi[d]) + "], got " + fmt(p[d]) + ")");
     };
-    for (auto& r : inst.array("gauges")) {
+    for (auto& r : inst.objects("gauges")) {
       Gauge g;
-      g.name = r.string("name", std::nullopt);
+      g.name = r.string("name");
       unique(r, g.name);
       g.position = r.vec("position", dim - 1);  // horizontal coordinates only
       inside(r, "position", g.position, dim - 1);
-      g.rate_hz = r.number("rate_hz", 100.0, 0.0, 1e6, true, false);
-      g.datum = r.number("datum_m", 0.0, -1e4, 1e4);
+      g.rate_hz = r.number("rate_hz");
+      g.datum = r.number("datum_m");
       r.finish();
       I.gauges.push_back(g);
     }
-    for (auto& r : inst.array("probes")) {
+    for (auto& r : inst.objects("probes")) {
       Probe p;
-      p.name = r.string("name", std::nullopt);
+      p.name = r.string("name");
       unique(r, p.name);
       p.position = r.vec("position", dim);
       inside(r, "position", p.position, dim);
-      p.rate_hz = r.number("rate_hz", 100.0, 0.0, 1e6, true, false);
+      p.rate_hz = r.number("rate_hz");
       r.finish();
       I.probes.push_back(p);
     }
-    for (auto& r : inst.array("loads")) {
+    for (auto& r : inst.objects("loads")) {
       LoadCell l;
-      l.name = r.string("name", std::nullopt);
+      l.name = r.string("name");
       unique(r, l.name);
-      l.boundary = r.string("boundary", std::nullopt);
+      l.boundary = r.string("boundary");
       bool found = false;
       for (const auto& b : sc.boundaries) found |= b.name == l.boundary;
       if (!found) r.fail("boundary", "names no boundary of this scene ('" + l.boundary + "')");
-      l.rate_hz = r.number("rate_hz", 1000.0, 0.0, 1e7, true, false);
+      l.rate_hz = r.number("rate_hz");
       r.finish();
       I.loads.push_back(l);
     }
-    for (auto& r : inst.array("sections")) {
+    for (auto& r : inst.objects("sections")) {
       Section c;
-      c.name = r.string("name", std::nullopt);
+      c.name = r.string("name");
       unique(r, c.name);
-      c.x_m = r.number("x_m", std::nullopt, sc.domain_lo[0] + 2 * sc.solver.dx, sc.domain_hi[0] - 2 * sc.solver.dx);
-      c.rate_hz = r.number("rate_hz", 200.0, 0.0, 1e6, true, false);
+      c.x_m = r.number("x_m", Bounds{sc.domain_lo[0] + 2 * sc.solver.dx, sc.domain_hi[0] - 2 * sc.solver.dx});
+      c.rate_hz = r.number("rate_hz");
       r.finish();
       I.sections.push_back(c);
     }
-    I.diagnostics_rate_hz = inst.number("diagnostics_rate_hz", 100.0, 0.0, 1e7, true, false);
-    I.snapshot_rate_hz = inst.number("snapshot_rate_hz", 0.0, 0.0, 1e4);
+    I.diagnostics_rate_hz = inst.number("diagnostics_rate_hz");
+    I.snapshot_rate_hz = inst.number("snapshot_rate_hz");
     inst.finish();
   }
 
@@ -797,34 +655,34 @@ Scene parse(const json& root_json, const std::string& file) {
     if (dim != 3) r.fail("", "debris need a 3D scene (the rigid bodies are 3D)");
     {
       Reader f = r.object("friction");
-      D.friction_flume = f.number("flume", D.friction_flume, 0.0, 2.0);
-      D.friction_debris = f.number("debris", D.friction_debris, 0.0, 2.0);
+      D.friction_flume = f.number("flume");
+      D.friction_debris = f.number("debris");
       f.finish();
       Reader e = r.object("restitution");
-      D.restitution_flume = e.number("flume", D.restitution_flume, 0.0, 1.0);
-      D.restitution_debris = e.number("debris", D.restitution_debris, 0.0, 1.0);
+      D.restitution_flume = e.number("flume");
+      D.restitution_debris = e.number("debris");
       e.finish();
     }
-    D.density = r.number("density", D.density, 1.0, 1e5);
-    D.resample_hz = r.number("resample_hz", 30.0, 0.0, 1e6, true, false);
-    D.record_rate_hz = r.number("record_rate_hz", 1000.0, 0.0, 1e7);
-    D.rest_speed_m_s = r.number("rest_speed_m_s", D.rest_speed_m_s, 0.0, 10.0, true);
-    D.rest_hold_s = r.number("rest_hold_s", D.rest_hold_s, 0.0, 1e4);
-    auto list = r.array("bodies");
+    D.density = r.number("density");
+    D.resample_hz = r.number("resample_hz");
+    D.record_rate_hz = r.number("record_rate_hz");
+    D.rest_speed_m_s = r.number("rest_speed_m_s");
+    D.rest_hold_s = r.number("rest_hold_s");
+    auto list = r.objects("bodies");
     if (list.empty()) r.fail("bodies", "is required: a non-empty array of boxes {name, size, position}");
     std::set<std::string> names;
     for (auto& b : list) {
       DebrisBody body;
-      body.name = b.string("name", "D" + std::to_string(D.bodies.size() + 1));
+      body.name = b.string_or("name", "D" + std::to_string(D.bodies.size() + 1));
       if (!names.insert(body.name).second) b.fail("name", "duplicate debris name '" + body.name + "'");
       body.size = b.vec("size", 3);
       for (int a = 0; a < 3; ++a)
         if (!(body.size[a] > 0)) b.fail("size", "edge lengths must be > 0 (axis " + std::to_string(a) + ")");
       body.position = b.vec("position", 3);
-      const double yaw = b.number("yaw_deg", 0.0, -360.0, 360.0) * M_PI / 180.0;
+      const double yaw = b.number("yaw_deg") * M_PI / 180.0;
       body.orientation = {std::cos(yaw / 2), 0.0, 0.0, std::sin(yaw / 2)};
       const double volume = body.size[0] * body.size[1] * body.size[2];
-      body.mass = b.number("mass", D.density * volume, 0.0, 1e6, true, false);
+      body.mass = b.number_or("mass", D.density * volume);
       // Its bounding box must lie in the domain and clear every solid boundary (a box started inside a wall
       // would be thrown out of it).
       const double hx = 0.5 * std::hypot(body.size[0], body.size[1]) ;
@@ -853,11 +711,11 @@ Scene parse(const json& root_json, const std::string& file) {
     if (!r.has("record"))
       r.fail("record", "is required: the result.h5 of a run with a section instrument at this plane (e.g. "
                        "--set inflow.record=RUN/result.h5, a path relative to the working directory)");
-    F.record = r.string("record", std::nullopt);
-    F.section = r.string("section", std::string("apron_inflow"));
-    F.buffer_cells = r.number("buffer_cells", 3.0, 2.0, 10.0);
+    F.record = r.string("record");
+    F.section = r.string("section");
+    F.buffer_cells = r.number("buffer_cells");
     const double lo = sc.domain_lo[0] + (F.buffer_cells + 2) * sc.solver.dx;
-    F.x_m = r.number("x_m", 4.35, lo, sc.domain_hi[0] - 2 * sc.solver.dx);
+    F.x_m = r.number("x_m", Bounds{lo, sc.domain_hi[0] - 2 * sc.solver.dx});
     if (dim == 3) {
       if (!r.has("y_m")) r.fail("y_m", "is required in 3D: [lo, hi], the lateral extent of the water at the plane");
       const Vec3d y = r.vec("y_m", 2);

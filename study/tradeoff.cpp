@@ -18,10 +18,12 @@
 #include "campaigns/run_folders.h"
 #include "common/command.h"
 #include "common/errors.h"
+#include "common/input/field_reader.h"
 #include "common/input/json_input.h"
 #include "common/plot/figure.h"
 #include "solver/scene.h"
 #include "store/h5/run_file.h"
+#include "study/spec_fields.h"
 
 namespace flume::study {
 namespace {
@@ -111,13 +113,12 @@ TradeoffSpec parse_tradeoff_spec(const std::string& json_text, const std::string
     return InputError(file_label, field, what);
   };
   const json root = input::parse_json_document(json_text, file_label);
-  static const std::set<std::string> known = {"name",     "description", "scene",   "overrides",
-                                              "settings", "reference",   "outputs", "run"};
-  for (auto it = root.begin(); it != root.end(); ++it)
-    if (!known.count(it.key()))
-      throw fail(
-          it.key(),
-          "unknown field (known: name, description, scene, overrides, settings, reference, outputs, run)");
+  // Unknown fields are refused first, before anything runs; name, description, scene, overrides and run are read
+  // by the campaign parser below (with the campaign's descriptions), outputs and reference here.
+  input::FieldReader reader(root, study_doc(), "", file_label);
+  for (const auto& f : study_doc().fields)
+    if (reader.has(f.key)) reader.accept(f.key);
+  reader.finish();
   if (!root.contains("settings") || !root["settings"].is_array() || root["settings"].size() < 2)
     throw fail("settings",
                "is required: an array of at least two settings {\"label\": ..., path: value, ...}");
@@ -149,13 +150,12 @@ TradeoffSpec parse_tradeoff_spec(const std::string& json_text, const std::string
   for (const auto& g : scene.instruments.gauges) scene_gauges.push_back(g.name);
   for (const auto& l : scene.instruments.loads) scene_loads.push_back(l.name);
 
-  const json outputs = root.value("outputs", json::object());
-  const std::vector<std::string> output_fields = {"gauges",  "loads",  "window_s", "arrival_threshold_m",
-                                                  "front_s", "metrics"};
-  if (!outputs.is_object()) throw fail("outputs", "must be an object {" + joined(output_fields) + "}");
-  for (auto it = outputs.begin(); it != outputs.end(); ++it)
-    if (std::find(output_fields.begin(), output_fields.end(), it.key()) == output_fields.end())
-      throw fail("outputs." + it.key(), "unknown field (known: " + joined(output_fields) + ")");
+  static const json no_outputs = json::object();
+  const json& outputs = root.contains("outputs") ? root["outputs"] : no_outputs;
+  input::FieldReader out(outputs, study_outputs_doc(), "outputs", file_label);
+  for (const auto& f : study_outputs_doc().fields)
+    if (out.has(f.key)) out.accept(f.key);
+  out.finish();
   auto names = [&](const char* key, const std::vector<std::string>& allowed, std::vector<std::string>& out,
                    bool all_by_default) {
     if (!outputs.contains(key)) {
@@ -192,37 +192,21 @@ TradeoffSpec parse_tradeoff_spec(const std::string& json_text, const std::string
     spec.window_start_s = w[0].get<double>();
     spec.window_end_s = w[1].get<double>();
   }
-  if (outputs.contains("arrival_threshold_m")) {
-    const json& a = outputs["arrival_threshold_m"];
-    if (!a.is_number() || !(a.get<double>() > 0) || !(a.get<double>() <= 1))
-      throw fail("outputs.arrival_threshold_m", "must be a number in (0, 1] m, got " + a.dump());
-    spec.arrival_threshold_m = a.get<double>();
-  }
-  if (outputs.contains("front_s")) {
-    const json& a = outputs["front_s"];
-    if (!a.is_number() || !(a.get<double>() >= 0) ||
-        !(a.get<double>() <= spec.window_end_s - spec.window_start_s))
-      throw fail("outputs.front_s", "must be a number in [0, " +
-                                        num(spec.window_end_s - spec.window_start_s) +
-                                        "] s (0: RMS over the whole window), got " + a.dump());
-    spec.front_s = a.get<double>();
-  }
+  spec.arrival_threshold_m = out.number("arrival_threshold_m");
+  spec.front_s = out.number("front_s", input::Bounds{0.0, spec.window_end_s - spec.window_start_s});
 
   if (!root.contains("reference") || !root["reference"].is_object() || root["reference"].size() != 1)
     throw fail("reference",
                "is required: {\"setting\": LABEL} (one of the settings) or {\"records\": CSV file}");
-  const json& ref = root["reference"];
-  if (ref.contains("setting")) {
-    if (!ref["setting"].is_string())
-      throw fail("reference.setting", "must be the label of one of the settings");
-    const std::string label = ref["setting"].get<std::string>();
+  input::FieldReader ref = reader.object("reference");
+  if (ref.has("setting")) {
+    const std::string label = ref.string("setting");
     const auto it = std::find(spec.labels.begin(), spec.labels.end(), label);
     if (it == spec.labels.end())
       throw fail("reference.setting", "'" + label + "' is not the label of any setting");
     spec.reference_setting = static_cast<size_t>(it - spec.labels.begin());
-  } else if (ref.contains("records")) {
-    if (!ref["records"].is_string()) throw fail("reference.records", "must be a CSV file of gauge records");
-    fs::path p(ref["records"].get<std::string>());
+  } else if (ref.has("records")) {
+    fs::path p(ref.string("records"));
     if (!p.is_absolute() && !fs::exists(p) && !base_dir.empty()) p = fs::path(base_dir) / p;
     spec.reference_records = p.string();
     if (!outputs.contains("loads")) spec.loads.clear();  // a gauge record: gauges only unless asked
@@ -242,9 +226,8 @@ TradeoffSpec parse_tradeoff_spec(const std::string& json_text, const std::string
         throw fail(
             "outputs.gauges." + std::to_string(i),
             "'" + spec.gauges[i] + "' has no column in the reference record " + spec.reference_records);
-  } else {
-    throw fail("reference." + ref.begin().key(), "unknown field (known: setting, records)");
   }
+  ref.finish();
   return spec;
 }
 
