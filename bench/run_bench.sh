@@ -49,9 +49,18 @@ done
 run float_t2_big 2 float --set 'domain.hi=[8.908, 1.579, 2.8]'
 
 echo
-echo "| run | threads | precision | particles | steps | s/step | particle-steps/s | grid MB | peak RSS MB | process CPU s | load before |"
-echo "|---|---|---|---|---|---|---|---|---|---|---|"
+echo "| run | threads | precision | particles | steps | s/step | particle-steps/s | per CPU-s | grid MB | peak RSS MB | process CPU s | load before |"
+echo "|---|---|---|---|---|---|---|---|---|---|---|---|"
 for f in "$out"/*.line; do
-  jq -r '"| \(.name) | \(.threads) | \(.precision) | \(.particles) | \(.steps) | \(.wall_s / .steps * 1000 | round / 1000) | \(.particle_steps_per_s | . / 1e6 * 100 | round / 100)e6 | \(.grid_mb | round) | \(.peak_rss_mb | round) | \(.process_cpu_s) | \(.load_before) |"' "$f"
+  jq -r '"| \(.name) | \(.threads) | \(.precision) | \(.particles) | \(.steps) | \(.wall_s / .steps * 1000 | round / 1000) | \(.particle_steps_per_s | . / 1e6 * 100 | round / 100)e6 | \(.particle_steps_per_cpu_s | . / 1e6 * 100 | round / 100)e6 | \(.grid_mb | round) | \(.peak_rss_mb | round) | \(.process_cpu_s) | \(.load_before) |"' "$f"
+done
+# Where the time goes (ms per step by stage, wall clock) and the memory traffic: bytes a particle-step moves as
+# the solver counts them, and the rate they moved at against the two cores' ceiling (about 43 GB/s).
+echo
+echo "| run | sort ms | P2G ms | grid ms | G2P ms | instruments ms | bytes/particle-step | GB/s |"
+echo "|---|---|---|---|---|---|---|---|"
+for f in "$out"/*.line; do
+  jq -r 'def ms(s): if .stage_s[s] == null then "-" else (.stage_s[s] / .steps * 1e4 | round / 10 | tostring) end;
+    "| \(.name) | \(ms("sort")) | \(ms("p2g")) | \(ms("grid")) | \(ms("g2p")) | \(ms("instruments")) | \(.bytes_per_particle_step // 0 | round) | \(.memory_gb_per_s // 0 | . * 10 | round / 10) |"' "$f"
 done
 jq -rs 'map({(.name): .}) | add | "sparse grid (float, 2 threads): time per step x\((.float_t2_big.wall_s / .float_t2_big.steps) / (.float_t2.wall_s / .float_t2.steps) * 1000 | round / 1000), grid memory x\(.float_t2_big.grid_mb / .float_t2.grid_mb * 1000 | round / 1000)"' "$out"/float_t2.line "$out"/float_t2_big.line

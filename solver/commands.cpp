@@ -106,6 +106,7 @@ void add_bench_command(CLI::App& app) {
     sim->step();
     const long steps0 = sim->steps();
     const long pairs0 = sim->neighbour_interactions();
+    const auto stages0 = sim->stage_seconds();
     const double cpu0 = process_cpu_s();
     const auto t0 = std::chrono::steady_clock::now();
     RunStatus st = RunStatus::kRunning;
@@ -114,6 +115,13 @@ void add_bench_command(CLI::App& app) {
     const double cpu = process_cpu_s() - cpu0;
     const long steps = sim->steps() - steps0;
     const long pairs = sim->neighbour_interactions() - pairs0;
+    // Wall seconds per stage of the measured steps, and the memory traffic of a step (the solver's count of
+    // what its loops read and write) per particle: with the rate, how far a run is from the memory bandwidth.
+    nlohmann::json stages = nlohmann::json::object();
+    const auto stages1 = sim->stage_seconds();
+    for (size_t k = 0; k < stages1.size() && k < stages0.size(); ++k)
+      stages[stages1[k].first] = stages1[k].second - stages0[k].second;
+    const double bytes = sim->bytes_per_step();
     nlohmann::json j = {{"scene", scene.file},
                         {"dimension", scene.dimension},
                         {"precision", to_string(scene.solver.precision)},
@@ -134,7 +142,10 @@ void add_bench_command(CLI::App& app) {
                         {"method", to_string(scene.solver.method)},
                         {"neighbour_interactions_per_s", wall > 0 ? double(pairs) / wall : 0},
                         {"grid_mb", sim->grid_bytes() / 1048576.0},
-                        {"active_blocks", sim->active_blocks()}};
+                        {"active_blocks", sim->active_blocks()},
+                        {"stage_s", stages},
+                        {"bytes_per_particle_step", sim->particle_count() ? bytes / double(sim->particle_count()) : 0},
+                        {"memory_gb_per_s", wall > 0 ? bytes * double(steps) / wall / 1e9 : 0}};
     std::printf("%s\n", j.dump(2).c_str());
     return st == RunStatus::kUnstable ? kExitUnstable : kExitOk;
   });

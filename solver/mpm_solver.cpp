@@ -109,10 +109,20 @@ class MpmSolver final : public Simulation {
       status_ = RunStatus::kOk;
       return status_;
     }
+    double t = omp_get_wtime();
+    const auto lap = [&](int stage) {  // adds the time since the last lap to a stage (stage_seconds)
+      const double now = omp_get_wtime();
+      stage_s_[stage] += now - t;
+      t = now;
+    };
     if (needs_sort_) sort_particles();
+    lap(kStageSort);
     p2g(T(dt));
+    lap(kStageP2g);
     grid_update(T(dt));
+    lap(kStageGrid);
     g2p(T(dt));
+    lap(kStageG2p);
     time_ += dt;
     dt_ = dt;
     ++steps_;
@@ -123,6 +133,7 @@ class MpmSolver final : public Simulation {
     }
     instruments_.add_impulses(load_impulse_, dt);
     instruments_.sample(*this, time_, dt, false);
+    lap(kStageOther);
     if (time_ >= scene_.solver.end_time - 1e-12) status_ = RunStatus::kOk;
     return status_;
   }
@@ -158,6 +169,30 @@ class MpmSolver final : public Simulation {
   }
   size_t active_blocks() const override { return gkeys_.size(); }
   size_t particle_bytes() const override { return n_ * sizeof(T) * (2 * D + D * D + 2); }
+  std::vector<std::pair<std::string, double>> stage_seconds() const override {
+    return {{"sort", stage_s_[kStageSort]},
+            {"p2g", stage_s_[kStageP2g]},
+            {"grid", stage_s_[kStageGrid]},
+            {"g2p", stage_s_[kStageG2p]},
+            {"instruments", stage_s_[kStageOther]}};
+  }
+  // The memory traffic of a step without a sort, counted from what the loops touch: P2G reads the particle
+  // state (x, v, C, e, vol) and writes its tile box; the grid update reads the tiles and writes the node arrays;
+  // G2P reads the nodes into its tile, reads x, e and vol and writes x, v, C and e.
+  double bytes_per_step() const override {
+    const double particles_read = double(n_) * sizeof(T) * (2 * D + D * D + 2);
+    const double particles_g2p = double(n_) * sizeof(T) * ((D + 2) + (2 * D + D * D + 1));
+    double tile_nodes = 0;
+    for (const TileBox& b : tile_box_) {
+      double v = 1;
+      for (int d = 0; d < D; ++d) v *= b.hi[d] - b.lo[d];
+      tile_nodes += v;
+    }
+    const double tiles = 2 * tile_nodes * kLanes * sizeof(T);  // written by P2G, read by the gather
+    const double nodes = double(gkeys_.size()) * kNodes;
+    const double grid = nodes * ((D + 3) * sizeof(T) + 1) + tile_nodes * ((D + 2) * sizeof(T) + 1);
+    return particles_read + particles_g2p + tiles + grid;
+  }
 
   void momentum(double linear[3], double angular[3]) const override {
     for (int d = 0; d < 3; ++d) linear[d] = angular[d] = 0;
@@ -498,32 +533,53 @@ class MpmSolver final : public Simulation {
       // receive into plain arrays across the batch; the second builds the lane vectors and scatters. The
       // scalar set-up (three fifths of P2G in perf) then runs back to back for 32 particles instead of
       // queueing behind each one's 27-node scatter (docs/solver.md, "Measurements behind the constants").
+      // Plain pointers to the particle arrays: GCC does not vectorise a loop that loads a vector's data pointer
+      // out of `this` in its body (x_[d][i]), and the set-up loop below then ran scalar.
+      const T *xs[D], *vs[D], *Cs[D * D];
+      for (int d = 0; d < D; ++d) {
+        xs[d] = x_[d].data();
+        vs[d] = v_[d].data();
+      }
+      for (int k = 0; k < D * D; ++k) Cs[k] = C_[k].data();
+      const T* es = e_.data();
+      const T* vols = vol_.data();
       for (uint32_t b0 = pstart_[p]; b0 < pstart_[p + 1]; b0 += kBatch) {
         const int nb = static_cast<int>(std::min<uint32_t>(kBatch, pstart_[p + 1] - b0));
         alignas(64) T bw[D][3][kBatch], bat0[kChannels][kBatch], bslope[D][D][kBatch], bp[kBatch];
         alignas(64) int brel[D][kBatch];
+        const T *bx[D], *bv[D], *bC[D * D], *be = es + b0, *bvol = vols + b0;  // the batch's particles
+        for (int d = 0; d < D; ++d) {
+          bx[d] = xs[d] + b0;
+          bv[d] = vs[d] + b0;
+        }
+        for (int k = 0; k < D * D; ++k) bC[k] = Cs[k] + b0;
 #pragma omp simd
-        for (int j = 0; j < nb; ++j) bp[j] = law.pressure_series(e_[b0 + j]);
+        for (int j = 0; j < nb; ++j) bp[j] = law.pressure_series(be[j]);
         for (int j = 0; j < nb; ++j)
-          if (!law.in_series(e_[b0 + j])) bp[j] = law.pressure_exact(e_[b0 + j]);
-#pragma omp simd
-        for (int j = 0; j < nb; ++j) {
-          const uint32_t i = b0 + j;
-          T f[D], xp[D];
-          for (int d = 0; d < D; ++d) {
-            xp[d] = x_[d][i];
-            const T xg = (xp[d] - lo_grid[d]) * inv_dx;
-            const int base = mpm::stencil_base(xg, f[d]);
-            brel[d][j] = base - origin[d];
+          if (!law.in_series(be[j])) bp[j] = law.pressure_exact(be[j]);
+        // The stencil weights in a loop of their own per axis (as G2P), then the particle's terms. Both loops
+        // vectorise across the batch (-fno-trapping-math for the float-to-int base); with `omp simd` on them
+        // GCC 12 gave up on both.
+        alignas(64) T bf[D][kBatch];
+        for (int d = 0; d < D; ++d) {
+          for (int j = 0; j < nb; ++j) {
             T w[3];
-            mpm::bspline_weights(f[d], w);
+            brel[d][j] = mpm::stencil_base((bx[d][j] - lo_grid[d]) * inv_dx, bf[d][j]) - origin[d];
+            mpm::bspline_weights(bf[d][j], w);
             for (int c = 0; c < 3; ++c) bw[d][c][j] = w[c];
           }
+        }
+        for (int j = 0; j < nb; ++j) {
+          T f[D], xp[D];
+          for (int d = 0; d < D; ++d) {
+            xp[d] = bx[d][j];
+            f[d] = bf[d][j];
+          }
           T Cp[D * D], vp[D], A[D * D], mom0[D], strain, volume;
-          for (int k = 0; k < D * D; ++k) Cp[k] = C_[k][i];
-          for (int a = 0; a < D; ++a) vp[a] = v_[a][i];
-          const T V = vol_[i], m = rho * V;
-          mpm::p2g_particle<D>(bp[j], Cp, e_[i], V, m, vp, f, xp, dx, mu, stress_scale, slope_h, A, mom0,
+          for (int k = 0; k < D * D; ++k) Cp[k] = bC[k][j];
+          for (int a = 0; a < D; ++a) vp[a] = bv[a][j];
+          const T V = bvol[j], m = rho * V;
+          mpm::p2g_particle<D>(bp[j], Cp, be[j], V, m, vp, f, xp, dx, mu, stress_scale, slope_h, A, mom0,
                                strain, volume);
           // What node (base + i) receives, before its weight: the channels at i = 0 plus i_b times slope[b].
           for (int a = 0; a < D; ++a) {
@@ -554,14 +610,24 @@ class MpmSolver final : public Simulation {
                 LaneMap(tile + (row + i1) * kLanes) += (bw[0][i0][j] * bw[1][i1][j]) * (r0 + T(i1) * slope[1]);
             }
           } else {
+            // Node (i0, i1, i2) receives w0 w1 w2 (at0 + i0 s0 + i1 s1 + i2 s2). The last axis' weight goes into
+            // the vectors once per particle (P, Q0, Q1 below), so that a node costs one vector multiply-add to
+            // form its value and one to add it, with no scalar weight product and broadcast per node.
+            Lane P[3], Q0[3], Q1[3];
+            for (int i2 = 0; i2 < 3; ++i2) {
+              const T w2 = bw[2][i2][j];
+              P[i2] = w2 * (at0 + T(i2) * slope[2]);
+              Q0[i2] = w2 * slope[0];
+              Q1[i2] = w2 * slope[1];
+            }
             for (int i0 = 0; i0 < 3; ++i0) {
-              const Lane r0 = at0 + T(i0) * slope[0];
+              Lane R0[3];
+              for (int i2 = 0; i2 < 3; ++i2) R0[i2] = P[i2] + T(i0) * Q0[i2];
               for (int i1 = 0; i1 < 3; ++i1) {
-                const Lane r1 = r0 + T(i1) * slope[1];
                 const T w01 = bw[0][i0][j] * bw[1][i1][j];
                 const int row = ((brel[0][j] + i0) * kTile + brel[1][j] + i1) * kTile + brel[2][j];
                 for (int i2 = 0; i2 < 3; ++i2)
-                  LaneMap(tile + (row + i2) * kLanes) += (w01 * bw[2][i2][j]) * (r1 + T(i2) * slope[2]);
+                  LaneMap(tile + (row + i2) * kLanes) += w01 * (R0[i2] + T(i1) * Q1[i2]);
               }
             }
           }
@@ -1052,9 +1118,6 @@ class MpmSolver final : public Simulation {
           inside &= xn >= T(lo_ok[d]) && xn <= T(hi_ok[d]);
           v2 += vd * vd;
           gx += grav[d] * xn;
-          // Drifted out of the tile margin: re-sort before the next scatter.
-          const int nr = mpm::stencil_base((xn - lo_grid[d]) * inv_dx, f[d]) - origin[d];
-          resort |= nr < 0 || nr > kBlock + 1;
         }
         for (int k = 0; k < D * D; ++k) C_[k][i] = Cn[k];
         if (!finite || !inside) {
@@ -1073,6 +1136,13 @@ class MpmSolver final : public Simulation {
         pe_b -= V * gx;
         el_b += V * law.energy_density(e);
       }
+      }
+      {  // a particle drifted out of the tile margin: re-sort before the next scatter
+        const T* xs[D];
+        for (int d = 0; d < D; ++d) xs[d] = x_[d].data();
+        int lo[D], hi[D];
+        mpm::stencil_base_range<D>(xs, pstart_[p], pstart_[p + 1], lo_grid, inv_dx, lo, hi);
+        for (int d = 0; d < D; ++d) resort |= lo[d] - origin[d] < 0 || hi[d] - origin[d] > kBlock + 1;
       }
       vmax2 = std::max(vmax2, double(vmax2_b));
       ke += 0.5 * rho * double(ke_b);
@@ -1203,6 +1273,8 @@ class MpmSolver final : public Simulation {
   // (docs/solver.md; tests/solver/test_debris.cpp).
   static constexpr double coupling_band_ = 1.0;
   bool needs_sort_ = true;
+  enum Stage { kStageSort, kStageP2g, kStageGrid, kStageG2p, kStageOther, kStages };
+  double stage_s_[kStages] = {};  // wall seconds per stage of the steps so far (stage_seconds)
   double time_ = 0, dt_ = 0, max_speed_ = 0;
   long steps_ = 0;
   double energy0_ = 0, energy_slack_ = 0;

@@ -3,6 +3,7 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "solver/scene.h"
@@ -82,6 +83,10 @@ class Simulation {
   virtual size_t grid_bytes() const = 0;
   virtual size_t active_blocks() const = 0;
   virtual size_t particle_bytes() const = 0;
+  // Wall seconds spent in each stage of the steps so far, in step order (empty where a backend does not
+  // time them), and the memory traffic of one step as the backend counts it (bytes; 0: not counted).
+  virtual std::vector<std::pair<std::string, double>> stage_seconds() const { return {}; }
+  virtual double bytes_per_step() const { return 0; }
   // Particle pairs within the kernel's support summed over every force evaluation so far (SPH; 0 for MPM).
   virtual long neighbour_interactions() const { return 0; }
   // Linear and angular momentum (about the origin), for conservation checks: 3 components each.

@@ -6,6 +6,7 @@
 #pragma once
 #include <algorithm>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "solver/mpm_kernels.h"
@@ -42,6 +43,32 @@ std::vector<TileNode> make_tile_map() {
   return map;
 }
 
+// The lowest and highest stencil base node, per axis, of the particles [begin, end) (x: D arrays of
+// positions): the base is a non-decreasing function of the position (every rounding in stencil_base is), so
+// those of the extreme positions are the extremes, found by a min/max reduction that vectorises instead of
+// a floor per particle and axis. An empty range gives lo > hi.
+template <int D, typename T>
+void stencil_base_range(const T* const* x, uint32_t begin, uint32_t end, const T* lo_grid, T inv_dx, int* lo,
+                        int* hi) {
+  for (int d = 0; d < D; ++d) {
+    const T* xd = x[d];
+    T xmin = std::numeric_limits<T>::max(), xmax = std::numeric_limits<T>::lowest();
+#pragma omp simd reduction(min : xmin) reduction(max : xmax)
+    for (uint32_t i = begin; i < end; ++i) {
+      xmin = std::min(xmin, xd[i]);
+      xmax = std::max(xmax, xd[i]);
+    }
+    if (begin >= end) {
+      lo[d] = 1;
+      hi[d] = 0;
+      continue;
+    }
+    T f;
+    lo[d] = stencil_base((xmin - lo_grid[d]) * inv_dx, f);
+    hi[d] = stencil_base((xmax - lo_grid[d]) * inv_dx, f);
+  }
+}
+
 // The tile nodes that the particles [begin, end) of block `blk` reach: the union of their 3^D stencils, [lo,
 // hi) per axis in tile coordinates. P2G zeroes and fills only these, the grid gather adds only these (the
 // rest of the tile would add exact zeros) and G2P fetches only these from the grid: a block of a thin sheet
@@ -51,18 +78,13 @@ template <int D, typename T>
 TileBox<D> tile_box(const int* blk, const T* const* x, uint32_t begin, uint32_t end, const T* lo_grid,
                     T inv_dx) {
   TileBox<D> box;
+  int lo[D], hi[D];
+  stencil_base_range<D>(x, begin, end, lo_grid, inv_dx, lo, hi);
   for (int d = 0; d < D; ++d) {
     const int origin = blk[d] * kBlock - 1;
-    int lo = kTile, hi = 0;
-    const T* xd = x[d];
-    for (uint32_t i = begin; i < end; ++i) {
-      T f;
-      const int rel = stencil_base((xd[i] - lo_grid[d]) * inv_dx, f) - origin;
-      lo = std::min(lo, rel);
-      hi = std::max(hi, rel + 3);
-    }
-    box.lo[d] = std::max(0, lo);
-    box.hi[d] = std::min(kTile, std::max(hi, box.lo[d]));
+    const int first = begin < end ? lo[d] - origin : kTile, last = begin < end ? hi[d] - origin + 3 : 0;
+    box.lo[d] = std::max(0, first);
+    box.hi[d] = std::min(kTile, std::max(last, box.lo[d]));
   }
   return box;
 }
