@@ -52,7 +52,9 @@ void kill_after_first_flush(int sig) {
   ASSERT_GT(pid, 0);
   Flushed seen;
   const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(60);
-  while (seen.t <= 0 && std::chrono::steady_clock::now() < give_up) {
+  // Wait for a flush that holds at least two diagnostics samples: on a slow build (sanitizers) the first
+  // flush may come before the run has simulated past its first sample.
+  while ((seen.t <= 0 || seen.samples < 2) && std::chrono::steady_clock::now() < give_up) {
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
     int status = 0;
     ASSERT_EQ(waitpid(pid, &status, WNOHANG), 0)
@@ -60,6 +62,7 @@ void kill_after_first_flush(int sig) {
     seen = read_part(out / "result.h5.part");
   }
   ASSERT_GT(seen.t, 0) << "no flush after t = 0 within 60 s";
+  ASSERT_GE(seen.samples, 2u) << "no flush with two diagnostics samples within 60 s";
   kill(pid, sig);
   const int rc = flume::test::wait_for(pid, 60);
   EXPECT_EQ(rc, 128 + sig) << flume::test::read_file(dir / "stderr.log");
