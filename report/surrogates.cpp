@@ -97,7 +97,7 @@ void exceedance_table(std::ostringstream& h, const SurrogateSummary& s) {
   if (s.thresholds.empty() || s.thresholds.size() > 12) return;
   const bool kriging = s.kind == "kriging";
   h << "<table class=small><tr><th>P(" << xml_escape(s.metric) << " &gt; t), from the " << xml_escape(s.kind)
-    << " on " << s.n_train << " solver runs</th>";
+    << " on " << s.n_train << " runs</th>";
   for (double t : s.thresholds) h << "<th>t = " << fmt(t) << "</th>";
   h << "</tr><tr><td>P [" << pct(s.confidence) << " interval]</td>";
   for (std::size_t i = 0; i < s.thresholds.size(); ++i)
@@ -112,9 +112,9 @@ void exceedance_table(std::ostringstream& h, const SurrogateSummary& s) {
       << " input points: the surrogate's uncertainty given the runs (it does not hold the solver's own "
          "error, nor the kriging's covariance parameters' uncertainty).";
   else
-    h << "Interval: percentiles of P over " << s.replicates << " bootstrap replicates of the runs, each on a "
-      << "sample of " << (s.band_points ? std::to_string(s.band_points) : std::string("its own"))
-      << " input points of its own: the surrogate's and the sampling's uncertainty, given the terms selected.";
+    h << "Interval: percentiles of P over " << s.replicates << " bootstrap replicates of the runs, each on "
+      << (s.band_points ? std::to_string(s.band_points) + " input points" : std::string("input points"))
+      << " of its own: the surrogate's and the sampling's uncertainty, given the terms selected.";
   h << "</p>\n";
 }
 

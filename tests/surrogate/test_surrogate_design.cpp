@@ -143,6 +143,8 @@ TEST(Adaptive, ExceedanceCampaignGathersRunsNearTheThresholdAndTheReportShowsP) 
   const TrainingData data = load_training_data(db, "adapt-t", "y");
   ASSERT_GT(data.y.size(), 15u);
   ASSERT_LE(data.y.size(), 40u);
+  r = flume::test::run_command({FLUME_EXE, "campaign", "status", "--db", db}, dir, 60);
+  EXPECT_NE(r.out.find("'adapt-t': " + std::to_string(data.y.size()) + " runs"), std::string::npos) << r.out;
   double initial = 0, added = 0;
   for (std::size_t i = 0; i < data.y.size(); ++i) (i < 15 ? initial : added) += std::abs(data.y[i] - 5);
   initial /= 15;
