@@ -128,6 +128,9 @@ CampaignData load_campaign(const std::string& db_file, const std::string& campai
     if (spec.contains("scene") && spec["scene"].is_string()) d.scene = spec["scene"].get<std::string>();
     if (spec.contains("design") && spec["design"].contains("type") && spec["design"]["type"].is_string())
       d.design_type = spec["design"]["type"].get<std::string>();
+    if ((d.design_type == "monte_carlo" || d.design_type == "lhs" || d.design_type == "sobol") &&
+        spec["design"].contains("samples") && spec["design"]["samples"].is_number_unsigned())
+      d.design_samples = spec["design"]["samples"].get<std::size_t>();
     if (spec.contains("overrides") && spec["overrides"].is_object())
       for (auto it = spec["overrides"].begin(); it != spec["overrides"].end(); ++it)
         if (auto v = param_from_json(it.value())) {

@@ -34,6 +34,9 @@ struct CampaignData {
   std::string scene;        // scene file of a scene campaign
   std::string design_type;  // "monte_carlo", "lhs", "sobol", "grid", "one_at_a_time", "saltelli"
   std::size_t saltelli_base_size = 0;
+  // Monte Carlo, LHS and Sobol' designs: the spec's sample count. Design points beyond it were added by
+  // `flume surrogate adapt` where its surrogate was least sure: not draws of the input law. 0: unknown.
+  std::size_t design_samples = 0;
   // Fixed values: the spec's overrides, then (where the scene file is readable) the few scene values the
   // report asks for (obstacles.layout); key -> value.
   std::map<std::string, store::ParamValue> fixed;

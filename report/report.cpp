@@ -99,6 +99,16 @@ Report build_report(const ReportOptions& options) {
     for (std::size_t i = 0; i < ab; ++i) r.sample.push_back(i);
     r.sample_note = "the A and B blocks of the Saltelli design (" + std::to_string(ab) + " of " +
                     std::to_string(n_rows) + " design points), which are independent draws of the inputs";
+  } else if (d.design_samples > 0 && n_rows > d.design_samples) {
+    // An adaptive campaign: the added points cluster where the surrogate was unsure (near a threshold, say),
+    // so with them the runs' statistics would be biased; the surrogate's estimates use every run.
+    for (std::size_t i = 0; i < d.design_samples; ++i) r.sample.push_back(i);
+    r.sample_note = "the first " + std::to_string(d.design_samples) + " of " + std::to_string(n_rows) +
+                    " design points, the " + d.design_type +
+                    " design's own; the other " + std::to_string(n_rows - d.design_samples) +
+                    " were added by 'flume surrogate adapt' where its surrogate was least sure, not drawn "
+                    "from the input law, so they enter the surrogates (section Surrogates) but not these "
+                    "statistics";
   } else {
     for (std::size_t i = 0; i < n_rows; ++i) r.sample.push_back(i);
     r.sample_note = "all " + std::to_string(n_rows) + " design points of the " + d.design_type + " design";

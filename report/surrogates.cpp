@@ -58,6 +58,8 @@ SurrogateSummary parse(const store::SurrogateRecord& rec) {
   s.p_lo = numbers(c.at("lo"));
   s.p_hi = numbers(c.at("hi"));
   s.replicates = c.at("replicates").get<std::size_t>();
+  s.mc_size = c.value("mc_size", std::size_t{0});
+  s.band_points = c.value("band_points", std::size_t{0});  // absent in fits stored before it was recorded
   return s;
 }
 
@@ -87,6 +89,33 @@ void quality_figure(std::ostringstream& h, const SurrogateSummary& s) {
     b.legend(plot::Legend::kUpperRight);
   }
   h << svg_or_note(fig);
+}
+
+// P(Y > t) at each threshold with its interval, and where the interval comes from. Drawn for thresholds given
+// to the fit (--thresholds); the 25 automatic ones are the curve's, shown in the figure only.
+void exceedance_table(std::ostringstream& h, const SurrogateSummary& s) {
+  if (s.thresholds.empty() || s.thresholds.size() > 12) return;
+  const bool kriging = s.kind == "kriging";
+  h << "<table class=small><tr><th>P(" << xml_escape(s.metric) << " &gt; t), from the " << xml_escape(s.kind)
+    << " on " << s.n_train << " runs</th>";
+  for (double t : s.thresholds) h << "<th>t = " << fmt(t) << "</th>";
+  h << "</tr><tr><td>P [" << pct(s.confidence) << " interval]</td>";
+  for (std::size_t i = 0; i < s.thresholds.size(); ++i)
+    h << "<td>" << est({s.p[i], {s.p_lo[i], s.p_hi[i]}}, 3) << "</td>";
+  h << "</tr></table>\n<p class=rests>P: the fraction of the " << xml_escape(s.kind) << (kriging ? " mean" : "")
+    << "'s outputs above t on " << s.mc_size << " Monte Carlo points of the input law. ";
+  if (s.replicates < 2)
+    h << "No interval: the fit was stored without replicates (<code>--bootstrap</code> 0).";
+  else if (kriging)
+    h << "Interval: percentiles of P over " << s.replicates << " conditional realisations of the kriging "
+      << "process on one sample of " << (s.band_points ? std::to_string(s.band_points) : std::string("the"))
+      << " input points: the surrogate's uncertainty given the runs (it does not hold the solver's own "
+         "error, nor the kriging's covariance parameters' uncertainty).";
+  else
+    h << "Interval: percentiles of P over " << s.replicates << " bootstrap replicates of the runs, each on "
+      << (s.band_points ? std::to_string(s.band_points) + " input points" : std::string("input points"))
+      << " of its own: the surrogate's and the sampling's uncertainty, given the terms selected.";
+  h << "</p>\n";
 }
 
 // The sampling estimates of the same metric (Saltelli design: Sobol' indices; otherwise rank correlations),
@@ -135,6 +164,7 @@ void surrogates_section(std::ostringstream& h, const Report& r) {
       << "-fold)</th><th>Q2 (" << s.n_holdout << " held back)</th><th>mean</th><th>std</th></tr><tr><td>"
       << fmt(s.q2_cv) << "</td><td>" << fmt(s.q2_holdout) << "</td><td>" << fmt(s.mean) << "</td><td>"
       << fmt(s.std) << "</td></tr></table>\n";
+    exceedance_table(h, s);
     if (!s.first.empty()) {
       const MetricReport* m = sampling_estimates(r, s.metric);
       h << "<table class=small><tr><th>input</th><th>S (chaos) [" << pct(s.confidence)

@@ -26,6 +26,8 @@ struct SurrogateSummary {
   double mean = 0, std = 0;
   std::vector<double> thresholds, p, p_lo, p_hi;
   std::size_t replicates = 0;
+  std::size_t mc_size = 0;      // input points of the central curve
+  std::size_t band_points = 0;  // input points of each replicate or realisation (0: not recorded)
 };
 
 // The campaign's stored surrogates (none for a store without the table). A malformed row is reported as an

@@ -77,6 +77,7 @@ ExceedanceCurve exceedance_curve(const OT::Function& model, const OT::Distributi
     for (std::size_t i = 0; i < c.thresholds.size(); ++i) reps[i].push_back(exceed_fraction(yr, c.thresholds[i]));
   }
   c.replicates = replicates.size();
+  if (!replicates.empty()) c.band_points = m;
   for (std::size_t i = 0; i < c.thresholds.size(); ++i) {
     if (reps[i].size() < 2) {
       c.lo.push_back(std::nan(""));
@@ -114,6 +115,7 @@ ExceedanceCurve kriging_exceedance(const OT::KrigingResult& k, const OT::Distrib
       c.hi[i] = iv.getUpperBound()[0];
     }
     c.replicates = count;
+    c.band_points = m;
   } catch (const OT::Exception&) {
     // A conditional covariance too close to singular (runs nearly repeated): the curve keeps no band.
   }
@@ -257,7 +259,8 @@ std::string quality_json(const FitResult& r, const TrainingData& data, const Fit
   }
   const auto& c = r.exceedance;
   q["exceedance"] = {{"thresholds", c.thresholds}, {"p", c.p},           {"lo", finite_list(c.lo)},
-                     {"hi", finite_list(c.hi)},    {"mc_size", c.mc_size}, {"replicates", c.replicates}};
+                     {"hi", finite_list(c.hi)},    {"mc_size", c.mc_size}, {"replicates", c.replicates},
+                     {"band_points", c.band_points}};
   return q.dump();
 }
 

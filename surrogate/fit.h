@@ -41,6 +41,7 @@ struct Estimate {
 struct ExceedanceCurve {
   std::vector<double> thresholds, p, lo, hi;  // lo/hi: NaN without replicates
   std::size_t mc_size = 0, replicates = 0;
+  std::size_t band_points = 0;  // input points each replicate (chaos) or realisation (kriging) is evaluated on
 };
 
 struct FitResult {

@@ -399,6 +399,10 @@ std::int64_t CampaignStore::prepare_resume(std::int64_t campaign, const std::vec
       point.bind(1, campaign).bind(2, r.design_index).bind(3, run_id).run();
       point.reset();
     }
+    // Points appended to the design (`flume surrogate adapt`) count in the campaign's size, as add_run's do.
+    Stmt size(db_, "UPDATE campaigns SET design_size = max(design_size, "
+                   "(SELECT count(*) FROM design_points WHERE campaign = ?1)) WHERE id = ?1");
+    size.bind(1, campaign).run();
   }
   Stmt requeue(db_, "UPDATE runs SET status = 'pending' WHERE campaign = ?1 AND status = 'running'");
   requeue.bind(1, campaign).run();
