@@ -19,6 +19,7 @@
 #include <sstream>
 
 #include "common/errors.h"
+#include "solver/interleave_axes.h"
 #include "solver/block_sort.h"
 #include "solver/checkpoint.h"
 #include "solver/debris_coupling.h"
@@ -147,14 +148,10 @@ class MpmSolver final : public Simulation {
   const std::string& message() const override { return message_; }
 
   void particle_positions(std::vector<double>& xyz) const override {
-    xyz.assign(3 * n_, 0.0);
-    for (size_t i = 0; i < n_; ++i)
-      for (int d = 0; d < D; ++d) xyz[3 * i + d] = x_[d][i];
+    interleave_axes<D>(x_, n_, xyz);
   }
   void particle_velocities(std::vector<double>& vel) const override {
-    vel.assign(3 * n_, 0.0);
-    for (size_t i = 0; i < n_; ++i)
-      for (int d = 0; d < D; ++d) vel[3 * i + d] = v_[d][i];
+    interleave_axes<D>(v_, n_, vel);
   }
   void particle_pressures(std::vector<double>& p) const override {
     p.resize(n_);

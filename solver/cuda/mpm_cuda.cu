@@ -55,6 +55,7 @@
 #include <cuda_runtime.h>
 #endif
 
+#include "solver/interleave_axes.h"
 #include "solver/checkpoint.h"
 #include "solver/cuda/mpm_cuda.h"
 #include "solver/inflow.h"
@@ -593,15 +594,11 @@ class MpmCuda final : public Simulation {
 
   void particle_positions(std::vector<double>& xyz) const override {
     sync_host();
-    xyz.assign(3 * n_, 0.0);
-    for (size_t i = 0; i < n_; ++i)
-      for (int d = 0; d < D; ++d) xyz[3 * i + d] = hx_[d][i];
+    interleave_axes<D>(hx_, n_, xyz);
   }
   void particle_velocities(std::vector<double>& vel) const override {
     sync_host();
-    vel.assign(3 * n_, 0.0);
-    for (size_t i = 0; i < n_; ++i)
-      for (int d = 0; d < D; ++d) vel[3 * i + d] = hv_[d][i];
+    interleave_axes<D>(hv_, n_, vel);
   }
   void particle_pressures(std::vector<double>& p) const override {
     std::vector<T> e(n_);

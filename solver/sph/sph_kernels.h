@@ -6,11 +6,7 @@
 #pragma once
 #include <cmath>
 
-#if defined(__CUDACC__)
-#define FLUME_HD __host__ __device__ __forceinline__
-#else
-#define FLUME_HD inline __attribute__((always_inline))
-#endif
+#include "common/host_device.h"
 
 namespace flume::sph {
 

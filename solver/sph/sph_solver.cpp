@@ -15,6 +15,7 @@
 #include <sstream>
 
 #include "common/errors.h"
+#include "solver/interleave_axes.h"
 #include "solver/checkpoint.h"
 #include "solver/instruments.h"
 #include "solver/seeding.h"
@@ -126,14 +127,10 @@ class SphSolver final : public Simulation {
   long neighbour_interactions() const override { return interactions_; }
 
   void particle_positions(std::vector<double>& xyz) const override {
-    xyz.assign(3 * n_, 0.0);
-    for (size_t i = 0; i < n_; ++i)
-      for (int d = 0; d < D; ++d) xyz[3 * i + d] = x_[d][i];
+    interleave_axes<D>(x_, n_, xyz);
   }
   void particle_velocities(std::vector<double>& vel) const override {
-    vel.assign(3 * n_, 0.0);
-    for (size_t i = 0; i < n_; ++i)
-      for (int d = 0; d < D; ++d) vel[3 * i + d] = v_[d][i];
+    interleave_axes<D>(v_, n_, vel);
   }
   void particle_pressures(std::vector<double>& p) const override {
     p.resize(n_);
