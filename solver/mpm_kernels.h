@@ -6,11 +6,7 @@
 #pragma once
 #include <cmath>
 
-#if defined(__CUDACC__)
-#define FLUME_HD __host__ __device__ __forceinline__
-#else
-#define FLUME_HD inline __attribute__((always_inline))
-#endif
+#include "common/host_device.h"
 
 namespace flume::mpm {
 
@@ -217,10 +213,6 @@ FLUME_HD void viscous_stress_with_pressure(T p, const T* C, T viscosity, T* sigm
       sigma[a * D + b] = T(2) * viscosity * (sym - (a == b ? trace / T(D) : T(0))) - (a == b ? p : T(0));
     }
 }
-template <int D, typename T>
-FLUME_HD void fluid_stress(T e, const T* C, const TaitLaw<T>& law, T viscosity, T* sigma) {
-  viscous_stress_with_pressure<D>(law.pressure(e), C, viscosity, sigma);
-}
 
 // det(I + dt C) - 1, the particle's volumetric strain over one step, summed from the invariants of dt C so
 // that nothing of size 1 is added and subtracted: 2D dt tr C + dt^2 det C; 3D dt tr C + dt^2 (sum of the
@@ -333,6 +325,9 @@ FLUME_HD void project_velocity(T* v, const T* n, const T* vb, Bc bc, T mu) {
 // a wall between two grid lines, such as the quay face at x = 4.45 m with dx = 0.02 m) is one whichever way the
 // round-off of its position falls.
 constexpr double kGhostDepth = 0.5 - 1e-6;
+// In cells: how far the quadratic B-spline stencil reaches; a particle further than this from a node gives it
+// nothing, so water beyond a face cannot reach a node deeper than this inside the solid.
+constexpr double kStencilReach = 1.5;
 // `axes` holds the normal axes in bits 0..2 and, kGhostSignShift above each, whether the fluid (the mirror node)
 // lies towards lower indices along it.
 constexpr int kGhostSignShift = 3;
@@ -366,16 +361,29 @@ FLUME_HD void ghost_half_space(const double* x, const double* point, const doubl
   ghost_axis_step(axis, -dist / dx, n[axis] > 0 ? 1 : -1, offset, axes, ambiguous);
 }
 
-// A node inside a box [lo, hi]: each face it lies 0.5 to 2 cells inside of (as MpmSolver::node_in_wall holds it).
+// A node inside a box [lo, hi]: each face it lies 0.5 to kStencilReach cells inside of (the faces that hold
+// it, wall_faces). Near a convex edge the node is reached by water on two sides (over the quay's top and in
+// front of its face): the method of images has no image for a convex edge (the diagonal reflection is the image
+// of a concave corner only, ghost_domain), and the diagonal mirror pushed back the water about to flow over the
+// edge. Such a node keeps its own velocity, as a node whose reflection is undefined does.
 template <int D>
 FLUME_HD void ghost_box(const double* x, const double* lo, const double* hi, double dx, int* offset, unsigned& axes,
                         bool& ambiguous) {
   for (int a = 0; a < D; ++a)
     if (!(x[a] > lo[a] && x[a] < hi[a])) return;  // not strictly inside
+  const double reach = kStencilReach - 1e-6;
+  const unsigned axes_before = axes;
+  int stepped = 0;
   for (int a = 0; a < D; ++a) {
     const double below = (x[a] - lo[a]) / dx, above = (hi[a] - x[a]) / dx;
-    if (below <= 2) ghost_axis_step(a, below, -1, offset, axes, ambiguous);
-    if (above <= 2) ghost_axis_step(a, above, 1, offset, axes, ambiguous);
+    const unsigned seen = axes;
+    if (below < reach) ghost_axis_step(a, below, -1, offset, axes, ambiguous);
+    if (above < reach) ghost_axis_step(a, above, 1, offset, axes, ambiguous);
+    stepped += axes != seen;
+  }
+  if (stepped > 1) {
+    ambiguous = true;
+    axes = axes_before;
   }
 }
 
@@ -533,10 +541,13 @@ FLUME_HD T half_space_distance(const T* x, const T* point, const T* n, T* normal
 // 1e-6 dx) is held, any other is free. Decided in double: walls usually sit on grid lines, and in float the
 // node on the wall would fall on either side of it by round-off (docs/solver.md).
 //
-// A node inside a box is held by every face within two cells of it, not only by the nearest: near the quay's
-// top edge the nearest face is the top, and a node constrained by it alone would let the basin's water flow
-// sideways into the wall. Inside a thin wall, such as the gate panel, both faces hold it. Returns the number
-// of normals written to n (0: the node is free).
+// A node inside a box is held by every face whose outside water can reach it, not only by the nearest: near
+// the quay's top edge the nearest face is the top, and a node constrained by it alone would let the basin's
+// water flow sideways into the wall. Inside a thin wall, such as the gate panel, both faces hold it. Water
+// beyond a face reaches a node less than kStencilReach cells in from it; a face deeper than that has nothing
+// to stop there, and holding the node by it anyway stopped the sheet flowing over the quay's crest (a node
+// 1.5 cells behind the front face and under the top lost its streamwise velocity; docs/validation.md,
+// section 1). Returns the number of normals written to n (0: the node is free).
 //
 // So a wall face between two grid lines acts from the next node inside it (a `subcell` boundary resolves it:
 // subcell_cover below; docs/calibration.md).
@@ -554,7 +565,7 @@ FLUME_HD int wall_faces(const double* x, bool box, const double* a, const double
   for (int ax = 0; ax < D; ++ax)
     for (int side = 0; side < 2; ++side) {
       const double depth = side == 0 ? x[ax] - a[ax] : b[ax] - x[ax];  // distance in from this face
-      if (depth > 2 * dx) continue;
+      if (depth > kStencilReach * dx - tol) continue;
       for (int d = 0; d < D; ++d) n[count][d] = d == ax ? (side == 0 ? -1.0 : 1.0) : 0.0;
       ++count;
     }

@@ -185,4 +185,47 @@ TEST(GhostMirror, MirrorNodeIsNearestTheReflection) {
   }
 }
 
+// The quay's crest at dx = 0.02 m: a box x > 4.45, z < 0.255 (both faces between grid lines). Water beyond a face
+// reaches a node inside only within the stencil's 1.5 cells, so a node 1.5 cells behind the front face and under
+// the top is held by the top alone (flow along the crest is tangential there), while one half a cell behind the
+// front face is held by both. Before, every face within 2 cells held a node, and the sheet crossing the crest
+// lost its streamwise velocity on the first two nodes (docs/validation.md, section 1).
+TEST(BoxFaces, ANodeIsHeldOnlyByFacesWhoseWaterReachesIt) {
+  using flume::mpm::wall_faces;
+  const double lo[2] = {4.45, -1.0}, hi[2] = {20.0, 0.255};
+  double n[4][2];
+  const double behind[2] = {4.48, 0.24};  // 1.5 cells in from the front face, 0.75 under the top
+  ASSERT_EQ(wall_faces<2>(behind, true, lo, hi, 0.02, n), 1);
+  EXPECT_EQ(n[0][0], 0.0);
+  EXPECT_EQ(n[0][1], 1.0) << "held by the top only";
+  const double edge[2] = {4.46, 0.24};  // half a cell in from the front face
+  EXPECT_EQ(wall_faces<2>(edge, true, lo, hi, 0.02, n), 2) << "held by the front face and the top";
+  // A thin panel (the 0.04 m gate at dx 0.02 m): both faces hold its inner nodes.
+  const double plo[2] = {1.0, 0.1}, phi[2] = {1.04, 1.0}, inside[2] = {1.02, 0.5};
+  EXPECT_EQ(wall_faces<2>(inside, true, plo, phi, 0.02, n), 2);
+}
+
+// Near a convex edge a ghost node is reached by water on two sides and has no image (the diagonal reflection is a
+// concave corner's): it keeps its own velocity. Next to one face only, its mirror is across that face.
+TEST(GhostMirror, ConvexEdgeHasNoImage) {
+  using flume::mpm::ghost_box;
+  const double lo[2] = {4.45, -1.0}, hi[2] = {20.0, 0.255};
+  int offset[2] = {0, 0};
+  unsigned axes = 0;
+  bool ambiguous = false;
+  const double corner[2] = {4.46, 0.23};  // 0.5 cells behind the front face, 1.25 under the top
+  ghost_box<2>(corner, lo, hi, 0.02, offset, axes, ambiguous);
+  EXPECT_TRUE(ambiguous) << "no diagonal mirror at a convex edge";
+  EXPECT_EQ(axes, 0u);
+  offset[0] = offset[1] = 0;
+  axes = 0;
+  ambiguous = false;
+  const double under_top[2] = {4.48, 0.24};  // 1.5 cells behind the front face: the top's ghost only
+  ghost_box<2>(under_top, lo, hi, 0.02, offset, axes, ambiguous);
+  EXPECT_FALSE(ambiguous);
+  EXPECT_EQ(axes, 1u << 1);
+  EXPECT_EQ(offset[0], 0);
+  EXPECT_EQ(offset[1], 2) << "the node nearest the reflection across the top, 0.27 m: 0.28 m";
+}
+
 }  // namespace
