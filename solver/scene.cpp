@@ -609,6 +609,8 @@ Scene parse(const json& root_json, const std::string& file) {
       inside(r, "position", g.position, dim - 1);
       g.rate_hz = r.number("rate_hz");
       g.datum = r.number("datum_m");
+      g.reading = r.choice<GaugeReading>("reading",
+                                         {{"volume", GaugeReading::kVolume}, {"connected", GaugeReading::kConnected}});
       r.finish();
       I.gauges.push_back(g);
     }
@@ -633,6 +635,21 @@ Scene parse(const json& root_json, const std::string& file) {
       l.rate_hz = r.number("rate_hz");
       r.finish();
       I.loads.push_back(l);
+    }
+    for (auto& r : inst.objects("pressure_probes")) {
+      PressureProbe p;
+      p.name = r.string("name");
+      unique(r, p.name);
+      p.position = r.vec("position", dim);
+      inside(r, "position", p.position, dim);
+      p.normal = r.vec("normal", dim);
+      double n2 = 0;
+      for (int d = 0; d < dim; ++d) n2 += p.normal[d] * p.normal[d];
+      if (!(n2 > 1e-24)) r.fail("normal", "must be a non-zero vector (|normal| > 0), the face's outward normal");
+      for (int d = 0; d < dim; ++d) p.normal[d] /= std::sqrt(n2);
+      p.rate_hz = r.number("rate_hz");
+      r.finish();
+      I.pressure_probes.push_back(p);
     }
     for (auto& r : inst.objects("sections")) {
       Section c;
