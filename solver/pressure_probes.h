@@ -13,14 +13,18 @@
 //
 // Filter. As the load cells report the mean force over each sampling interval (impulse / time), a probe
 // reports the mean of its per-step readings over the interval (each weighted by its step), so a short impact
-// between two samples is not lost; the first sample (t = 0) is the reading then. Each step costs one pass over
-// the particles' positions and, when one is in a probe's support, their pressures (on the CUDA backend that
-// copies the particles to the host after every step).
+// between two samples is not lost; the first sample (t = 0) is the reading then. Each step costs one parallel pass
+// over the particles' positions and, when one is in a probe's support, the solver's pass computing every
+// particle's pressure (on the CUDA backend both copy the particles to the host after every step).
 #pragma once
 #include <algorithm>
 #include <cmath>
 #include <string>
 #include <vector>
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
 
 #include "solver/checkpoint.h"
 #include "solver/scene.h"
@@ -55,9 +59,23 @@ class PressureProbeSet {
     const size_t np = probes.size();
     wsum_.assign(np, 0.0);
     psum_.assign(np, 0.0);
-    hits_.clear();
-    // First the particles in a support, from their positions alone; pressures only if any is.
-    for (size_t i = 0; i < s.n(); ++i) {
+    // First the particles in a support, from their positions alone (in parallel: each thread gathers its
+    // contiguous share of the particles, and the shares are joined in order, so the sums below run in particle
+    // order whatever the thread count); pressures only if any is.
+    int threads = 1;
+#ifdef _OPENMP
+    threads = omp_get_max_threads();
+#endif
+    local_.resize(static_cast<size_t>(threads));
+    for (auto& l : local_) l.clear();
+    const size_t n = s.n();
+    if (n > 0) (void)s.x(0, 0);  // the CUDA backend refreshes its host copy on a first read: not in the threads
+#pragma omp parallel for schedule(static) num_threads(threads)
+    for (size_t i = 0; i < n; ++i) {
+      int me = 0;
+#ifdef _OPENMP
+      me = omp_get_thread_num();
+#endif
       double x[3] = {0, 0, 0};
       for (int d = 0; d < D; ++d) x[d] = double(s.x(d, i));
       for (size_t k = 0; k < np; ++k) {
@@ -77,9 +95,11 @@ class PressureProbeSet {
         if (w <= 0) continue;
         double head = 0;  // rho g . (x_face - x_p)
         for (int d = 0; d < D; ++d) head -= g[d] * r[d];
-        hits_.push_back({i, k, w, rho * head});
+        local_[static_cast<size_t>(me)].push_back({i, k, w, rho * head});
       }
     }
+    hits_.clear();
+    for (const auto& l : local_) hits_.insert(hits_.end(), l.begin(), l.end());
     if (!hits_.empty()) s.particle_pressures(pressure_);
     for (const Hit& h : hits_) {
       wsum_[h.probe] += h.w;
@@ -124,6 +144,7 @@ class PressureProbeSet {
   std::vector<double> clocks_, next_, sum_, since_, now_;
   std::vector<double> wsum_, psum_, pressure_;
   std::vector<Hit> hits_;
+  std::vector<std::vector<Hit>> local_;  // per thread
 };
 
 }  // namespace flume

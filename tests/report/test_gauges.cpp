@@ -218,6 +218,22 @@ TEST_F(GaugesCli, PressureProbesAfterTheGauges) {
   EXPECT_NE(r.out.find("PS1 run_d: peak 1000.0 Pa"), std::string::npos) << r.out;
 }
 
+// `flume export --csv` writes the pressure probes beside the gauges, one row per sample.
+TEST_F(GaugesCli, ExportWritesPressureProbes) {
+  fs::create_directories(dir_ / "run_p");
+  {
+    flume::h5::RunFile f((dir_ / "run_p" / "result.h5").string());
+    write_gauge(f, "WG1", 0.02, [](double) { return 0.0; });
+    f.write_series("/pressure_probes/PS1", "time", {0.0, 0.001, 0.002});
+    f.write_series("/pressure_probes/PS1", "pressure", {0.0, 12.5, 0.25});
+    f.finalize();
+  }
+  const Result r = run({FLUME_EXE, "export", (dir_ / "run_p").string(), "--csv", (dir_ / "csv").string()}, dir_);
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_EQ(read_file(dir_ / "csv" / "pressure_probes.csv"), "name,time,pressure\nPS1,0,0\nPS1,0.001,12.5\nPS1,0.002,0.25\n");
+  EXPECT_TRUE(fs::exists(dir_ / "csv" / "gauges.csv"));
+}
+
 TEST(PressureSummary, PeakTimeAndImpulseSkipNonFiniteSamples) {
   const double nan = std::nan("");
   // Each sample is the mean over the interval before it: impulse 0.5 x 1 + 2 x 1 + 1 x 2 (the NaN's interval
