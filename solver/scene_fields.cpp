@@ -196,8 +196,13 @@ const ObjectDoc& pressure_probe_doc() {
       {string("name", "name, unique among the instruments").needed().eg("PS1"),
        vector("position", 2, 3, "a point on the face").needed().in_unit("m").note("inside the domain"),
        vector("normal", 2, 3, "the face's outward normal, out of the solid into the water (normalised)")
-           .needed()
+           .needed_when("without boundary")
            .note("non-zero"),
+       string("boundary",
+              "instead of normal: the boundary whose face the probe sits on (a half-space's plane, or the box "
+              "face nearest the point), within dx/2 of it")
+           .needed_when("without normal")
+           .eg("column"),
        number("rate_hz", "sampling rate").above(0).at_most(1e7).def(1000.0).in_unit("Hz")}};
   return d;
 }

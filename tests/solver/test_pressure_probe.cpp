@@ -122,6 +122,43 @@ TEST(PressureProbe, BadInput) {
                   "instruments.pressure_probes.0.rate_hz", "(0, 1e+07]");
   expect_rejected(R"({"name": "short", "position": [0.05, 0.0, 0.0], "normal": [0, 1]})",
                   "instruments.pressure_probes.0.position", "array of 2 numbers");
+  expect_rejected(R"({"name": "off", "position": [0.05, 0.02], "boundary": "floor"})",
+                  "instruments.pressure_probes.0.position", "within dx/2 = 0.005 m");
+  expect_rejected(R"({"name": "both", "position": [0.05, 0.0], "boundary": "floor", "normal": [0, 1]})",
+                  "instruments.pressure_probes.0.boundary", "one of the two");
+  expect_rejected(R"({"name": "none", "position": [0.05, 0.0]})", "instruments.pressure_probes.0.normal",
+                  "one of the two");
+  expect_rejected(R"({"name": "gate", "position": [0.05, 0.0], "boundary": "gate"})",
+                  "instruments.pressure_probes.0.boundary", "names no boundary");
+}
+
+// A probe may name the boundary it sits on instead of a normal: a half-space's normal, a box's nearest face.
+TEST(PressureProbe, NormalFromABoundary) {
+  std::string text = column_scene("mpm", R"({"name": "r", "position": [0.1, 0.05], "boundary": "right"},
+                                           {"name": "f", "position": [0.05, 0.002], "boundary": "floor"})");
+  Scene scene = parse_scene_text(text, "from_boundary.json");
+  const auto& p = scene.instruments.pressure_probes;
+  EXPECT_EQ(p[0].normal[0], -1.0);
+  EXPECT_EQ(p[0].normal[1], 0.0);
+  EXPECT_EQ(p[1].normal[0], 0.0);
+  EXPECT_EQ(p[1].normal[1], 1.0);
+  // A box column: its front (x = lo), top and back faces.
+  const std::string from = R"("instruments": {)";
+  text.replace(text.find(from), from.size(), R"("instruments": {"loads": [],)");
+  const std::string walls = R"({"name": "floor",)";
+  text.replace(text.find(walls), walls.size(),
+               R"({"name": "column", "type": "box", "lo": [0.12, 0.0], "hi": [0.14, 0.1]}, {"name": "floor",)");
+  const std::string probes = R"({"name": "r", "position": [0.1, 0.05], "boundary": "right"},)";
+  text.replace(text.find(probes), probes.size(),
+               R"({"name": "front", "position": [0.12, 0.03], "boundary": "column"},
+                  {"name": "top", "position": [0.13, 0.1], "boundary": "column"},
+                  {"name": "back", "position": [0.14, 0.05], "boundary": "column"},)");
+  scene = parse_scene_text(text, "column.json");
+  const auto& q = scene.instruments.pressure_probes;
+  ASSERT_EQ(q.size(), 4u);
+  EXPECT_EQ(q[0].normal[0], -1.0);
+  EXPECT_EQ(q[1].normal[1], 1.0);
+  EXPECT_EQ(q[2].normal[0], 1.0);
 }
 
 }  // namespace
