@@ -2,11 +2,12 @@
 # Issue 30: pressure probes up a wall against the wall's load cell (docs/results.md, "Against the load cell").
 # A 2D dam break, 0.2 x 0.2 m of water 0.4 m from a slip wall, dx = 1 cm; 40 probes 1 cm apart up the wall,
 # their pressures times 1 cm summed, against the load cell's force (N/m), as 0.1 s means and the impulse.
-#   docs/pressure_probes_wall.sh [FLUME] [OUT]
+#   docs/pressure_probes_wall.sh [FLUME] [OUT] [METHOD]     METHOD: mpm (default) or sph
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 flume=${1:-$root/build/bin/flume}
 out=${2:-$(mktemp -d)}
+method=${3:-mpm}
 mkdir -p "$out"
 probes=$(/usr/bin/python3 -c 'import json; print(json.dumps([{"name": "z%02d" % k, "position": [0.6, 0.005 + 0.01 * k], "normal": [-1, 0]} for k in range(40)]))')
 cat > "$out/wall.json" <<JSON
@@ -21,7 +22,7 @@ cat > "$out/wall.json" <<JSON
    {"name": "wall", "type": "half_space", "point": [0.6, 0], "normal": [-1, 0], "condition": "slip"}],
  "instruments": {"loads": [{"name": "wall", "boundary": "wall", "rate_hz": 1000}], "pressure_probes": $probes}}
 JSON
-"$flume" run "$out/wall.json" --out "$out/run" --threads 1 >/dev/null
+"$flume" run "$out/wall.json" --out "$out/run" --threads 1 --set solver.method=$method >/dev/null
 /usr/bin/python3 - "$out/run/result.h5" <<'PY'
 import sys
 import h5py
