@@ -27,4 +27,19 @@ GaugeSummary summarize_gauge(const std::vector<double>& time, const std::vector<
   return s;
 }
 
+PressureSummary summarize_pressure(const std::vector<double>& time, const std::vector<double>& value) {
+  PressureSummary s;
+  bool any = false;
+  for (std::size_t i = 0; i < time.size() && i < value.size(); ++i) {
+    if (!std::isfinite(value[i]) || !std::isfinite(time[i])) continue;
+    if (!any || value[i] > s.peak) {
+      s.peak = value[i];
+      s.peak_time = time[i];
+      any = true;
+    }
+    if (i > 0 && std::isfinite(time[i - 1])) s.impulse += value[i] * (time[i] - time[i - 1]);
+  }
+  return s;
+}
+
 }  // namespace flume

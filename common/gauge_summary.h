@@ -14,4 +14,12 @@ struct GaugeSummary {
 };
 GaugeSummary summarize_gauge(const std::vector<double>& time, const std::vector<double>& value, double threshold);
 
+// Peak, its time and impulse of a pressure probe's record (Pa, s, Pa s). Each sample is the mean over the
+// interval since the one before it (solver/pressure_probes.h), so the impulse is the sum of sample x interval,
+// exactly the integral of the per-step readings. Non-finite samples are skipped; an empty record has all 0.
+struct PressureSummary {
+  double peak = 0, peak_time = 0, impulse = 0;
+};
+PressureSummary summarize_pressure(const std::vector<double>& time, const std::vector<double>& value);
+
 }  // namespace flume

@@ -142,7 +142,7 @@ std::vector<std::string> export_run_csv(const std::string& h5_file, const std::s
     // written by a flume before the attribute: 3D column names
   }
   std::vector<std::string> written;
-  for (const char* kind : {"gauges", "probes", "loads", "sections"}) {
+  for (const char* kind : {"gauges", "probes", "loads", "pressure_probes", "sections"}) {
     if (!h5->exists(std::string("/") + kind)) continue;
     const std::string file = (fs::path(out_dir) / (std::string(kind) + ".csv")).string();
     write_kind(*h5, kind, {"name"}, dimension, file);
@@ -177,7 +177,7 @@ void add_export_command(CLI::App& app) {
   };
   auto a = std::make_shared<Args>();
   app.add_option("RUN_DIR", a->run_dir, "a finished run's folder (the --out of `flume run`)")->required();
-  app.add_option("--csv", a->csv, "the folder for gauges.csv, probes.csv, loads.csv, sections.csv, debris.csv, "
+  app.add_option("--csv", a->csv, "the folder for gauges.csv, probes.csv, loads.csv, pressure_probes.csv, sections.csv, debris.csv, "
                                   "diagnostics.csv (long form, SI units: docs/results.md)")
       ->required();
   cli::on_parse(app, [a]() -> int {

@@ -1,5 +1,5 @@
-// `flume gauges RUN_DIR[=LABEL] ... --out FILE.svg`: the free-surface gauge records of one or more finished
-// runs, one panel per gauge (stacked, sharing the time axis) with one line per run, and on stdout one line per
+// `flume gauges RUN_DIR[=LABEL] ... --out FILE.svg`: the free-surface gauge (and pressure probe) records of one
+// or more finished runs, one panel per gauge (stacked, sharing the time axis) with one line per run, and on stdout one line per
 // gauge and run with the peak, its time and the arrival, so that docs can quote the numbers.
 #include "report/gauges.h"
 
@@ -32,6 +32,7 @@ constexpr double kArrivalThresholdM = 0.005;  // 5 mm, as `flume run` has it for
 struct Record {
   std::vector<double> time, value;
   std::string unit = "m";
+  bool pressure = false;  // a pressure probe's record (Pa), not a gauge's
 };
 
 struct Run {
@@ -111,6 +112,8 @@ Run open_run(const std::string& dir, const std::string& label) {
   return r;
 }
 
+// The gauges' elevations and the pressure probes' pressures (issue 30) of a run, over t <= t_max: those
+// named in `wanted`, or all of them (gauges first). A run needs one or the other.
 void read_gauges(Run& r, const std::vector<std::string>* wanted, double t_max) {
   std::unique_ptr<h5::Reader> h5;
   try {
@@ -118,21 +121,29 @@ void read_gauges(Run& r, const std::vector<std::string>* wanted, double t_max) {
   } catch (const std::runtime_error&) {
     throw InputError(r.h5_file, "", "cannot open as an HDF5 file");
   }
-  if (!h5->exists("/gauges")) throw InputError(r.h5_file, "/gauges", "missing: the run recorded no gauges");
-  r.gauges = h5->list("/gauges");
+  std::vector<std::string> probes;
+  if (h5->exists("/gauges")) r.gauges = h5->list("/gauges");
+  if (h5->exists("/pressure_probes")) probes = h5->list("/pressure_probes");
+  if (r.gauges.empty() && probes.empty())
+    throw InputError(r.h5_file, "/gauges", "missing: the run recorded no gauges (nor pressure probes)");
   sort_gauge_names(r.gauges);
-  if (r.gauges.empty()) throw InputError(r.h5_file, "/gauges", "holds no gauges");
+  sort_gauge_names(probes);
+  std::vector<std::string> all = r.gauges;
+  all.insert(all.end(), probes.begin(), probes.end());
+  r.gauges = all;
   const std::vector<std::string>& names = wanted ? *wanted : r.gauges;
   for (const std::string& name : names) {
-    const std::string group = "/gauges/" + name;
+    const bool is_probe = std::find(probes.begin(), probes.end(), name) != probes.end();
+    const std::string group = (is_probe ? "/pressure_probes/" : "/gauges/") + name;
+    const char* value_name = is_probe ? "pressure" : "elevation";
     if (std::find(r.gauges.begin(), r.gauges.end(), name) == r.gauges.end())
-      throw InputError(r.h5_file, group, "missing: the run has gauges " + join(r.gauges));
+      throw InputError(r.h5_file, group, "missing: the run has gauges and pressure probes " + join(r.gauges));
     Record rec;
-    for (const char* ds : {"time", "elevation"})
+    for (const char* ds : {"time", value_name})
       if (!h5->exists(group + "/" + ds)) throw InputError(r.h5_file, group + "/" + ds, "missing");
-    const std::vector<double> t = h5->read_vector(group + "/time"), v = h5->read_vector(group + "/elevation");
+    const std::vector<double> t = h5->read_vector(group + "/time"), v = h5->read_vector(group + "/" + value_name);
     if (t.size() != v.size())
-      throw InputError(r.h5_file, group, "time has " + std::to_string(t.size()) + " samples, elevation " +
+      throw InputError(r.h5_file, group, "time has " + std::to_string(t.size()) + " samples, " + value_name + " " +
                                              std::to_string(v.size()) + ": they must match");
     for (std::size_t i = 0; i < t.size(); ++i)
       if (t[i] <= t_max) {
@@ -142,7 +153,8 @@ void read_gauges(Run& r, const std::vector<std::string>* wanted, double t_max) {
     if (rec.time.empty())
       throw InputError(r.h5_file, group + "/time",
                        t.empty() ? "is empty" : "has no sample at or before --t-max " + std::to_string(t_max) + " s");
-    rec.unit = gauge_unit(*h5, group);
+    rec.unit = is_probe ? "Pa" : gauge_unit(*h5, group);
+    rec.pressure = is_probe;
     r.records[name] = std::move(rec);
   }
 }
@@ -157,6 +169,12 @@ double arrival_threshold(const std::string& unit) {
 
 void print_summary(const std::string& gauge, const Run& r) {
   const Record& rec = r.records.at(gauge);
+  if (rec.pressure) {  // the metrics `flume run` puts in run.json (summarize_pressure)
+    const PressureSummary p = summarize_pressure(rec.time, rec.value);
+    std::printf("%s %s: peak %.1f Pa at %.4f s, impulse %.3f Pa s\n", gauge.c_str(), r.label.c_str(), p.peak + 0.0,
+                p.peak_time, p.impulse + 0.0);
+    return;
+  }
   const double threshold = arrival_threshold(rec.unit);
   const GaugeSummary s = summarize_gauge(rec.time, rec.value, threshold > 0 ? threshold : 0);
   std::printf("%s %s: ", gauge.c_str(), r.label.c_str());
@@ -214,10 +232,11 @@ void add_gauges_command(CLI::App& app) {
   app.footer(
       "One panel per gauge (default: every gauge of the first run), one line per run (LABEL: default the folder's\n"
       "name); prints per gauge and run the peak, its time and the arrival (the first time the record rises 5 mm\n"
-      "above its first reading), over t <= --t-max when given.");
+      "above its first reading), over t <= --t-max when given. Pressure probes get panels too (after the gauges),\n"
+      "with their peak pressure, its time and the pressure impulse.");
   app.add_option("RUN_DIR", a->runs, "a finished run's folder, optionally =LABEL")->required()->type_name("RUN_DIR[=LABEL]");
   app.add_option("--out", a->out, "the .svg file to write")->required();
-  app.add_option("--gauges", a->gauges, "the gauges to show, e.g. WG1,WG2")->type_name("WG1,WG2,...");
+  app.add_option("--gauges", a->gauges, "the gauges and pressure probes to show, e.g. WG1,WG2")->type_name("WG1,WG2,...");
   app.add_option("--t-max", a->t_max, "the last time shown and summarised (s)")->type_name("S");
   app.add_option("--title", a->title, "the figure's title");
   cli::on_parse(app, [a]() -> int {
@@ -260,7 +279,8 @@ void add_gauges_command(CLI::App& app) {
     for (int g = 0; g < n; ++g) {
       const std::string& name = wanted[static_cast<std::size_t>(g)];
       plot::Axes& ax = fig.axes(g, 0);
-      ax.title(name).ylabel("eta (" + runs[0].records.at(name).unit + ")").xlim(t_lo, t_hi);
+      const Record& first = runs[0].records.at(name);
+      ax.title(name).ylabel((first.pressure ? "p (" : "eta (") + first.unit + ")").xlim(t_lo, t_hi);
       if (g == n - 1) ax.xlabel("t (s)");
       for (std::size_t k = 0; k < runs.size(); ++k) {
         const Record& rec = runs[k].records.at(name);

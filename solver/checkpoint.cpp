@@ -15,7 +15,7 @@ namespace flume {
 namespace {
 
 constexpr char kMagic[8] = {'F', 'L', 'U', 'M', 'E', 'C', 'K', 'P'};
-constexpr uint32_t kVersion = 1;
+constexpr uint32_t kVersion = 2;  // 2: pressure probes
 
 uint64_t fnv1a(const std::string& s) {
   uint64_t h = 1469598103934665603ull;

@@ -1,4 +1,4 @@
-// Instruments: free-surface gauges, velocity probes, load cells and diagnostics, sampled at their rates.
+// Instruments: free-surface gauges, velocity probes, load cells, pressure probes and diagnostics, sampled at their rates.
 // Templated on the solver so they read its particle arrays directly, in its own precision.
 #pragma once
 #include <algorithm>
@@ -9,6 +9,8 @@
 
 #include "solver/scene.h"
 #include "solver/checkpoint.h"
+#include "solver/connected_depth.h"
+#include "solver/pressure_probes.h"
 #include "solver/simulation.h"
 
 namespace flume {
@@ -99,7 +101,7 @@ inline double gauge_open_fraction(const Scene& s, const Vec3d& position, double 
 template <class Solver>
 class InstrumentSet {
  public:
-  explicit InstrumentSet(const Scene& scene) : scene_(scene) {
+  explicit InstrumentSet(const Scene& scene) : scene_(scene), pressures_(scene) {
     const int D = scene.dimension;
     for (const auto& g : scene.instruments.gauges) {
       record_.gauges[g.name].components = 1;
@@ -152,6 +154,7 @@ class InstrumentSet {
     ar.expect("instruments.loads", load_impulse_.size());
     for (auto& li : load_impulse_) ar(li);
     ar(load_since_);
+    pressures_.checkpoint(ar);
     ar(next_diag_);
   }
 
@@ -169,7 +172,10 @@ class InstrumentSet {
       if (due(gauges_[k], t, force)) {
         auto& ts = record_.gauges[gauges_[k].name];
         ts.time.push_back(t);
-        ts.values.push_back(gauge_elevation(s, scene_.instruments.gauges[k]) - scene_.instruments.gauges[k].datum);
+        const Gauge& g = scene_.instruments.gauges[k];
+        const double z = g.reading == GaugeReading::kConnected ? connected_elevation(s, scene_, g, ground_[k], heights_)
+                                                                : gauge_elevation(s, g);
+        ts.values.push_back(z - g.datum);
       }
     for (size_t k = 0; k < probes_.size(); ++k)
       if (due(probes_[k], t, force)) {
@@ -189,6 +195,7 @@ class InstrumentSet {
         std::fill(load_impulse_[k].begin(), load_impulse_[k].end(), 0.0);
         load_since_[k] = t;
       }
+    pressures_.step(s, t, dt, force, record_);  // every step: a probe reports its interval's mean
     for (size_t k = 0; k < sections_.size(); ++k)
       if (due(sections_[k], t, force)) section_sample(s, t, record_.sections[sections_[k].name]);
     Clock diag{"", diag_period_, next_diag_};
@@ -318,6 +325,8 @@ class InstrumentSet {
   std::vector<Clock> gauges_, probes_, loads_, sections_;
   std::vector<double> acc_m_, acc_u_, acc_zm_, acc_zu_;
   std::vector<double> ground_, open_;  // per gauge: ground level, open share of its footprint
+  std::vector<double> heights_;        // a connected gauge's column (solver/connected_depth.h)
+  PressureProbeSet<Solver> pressures_;
   std::vector<size_t> load_wall_;
   std::vector<std::vector<double>> load_impulse_;
   std::vector<double> load_since_;

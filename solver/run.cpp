@@ -60,6 +60,21 @@ void write_record(h5::RunFile& file, const Scene& scene, const Record& record) {
     file.append_series("/loads/" + name, "time", ts.time);
     file.append_matrix("/loads/" + name, "force", ts.values, ts.components);
   }
+  // /pressure_probes/<name>: time (n), pressure (n, Pa: each sample the mean over the interval before it).
+  for (const auto& [name, ts] : record.pressures) {
+    const std::string g = "/pressure_probes/" + name;
+    file.append_series(g, "time", ts.time);
+    file.append_series(g, "pressure", ts.values);
+    for (const auto& p : scene.instruments.pressure_probes)
+      if (p.name == name)
+        for (int d = 0; d < scene.dimension; ++d) {
+          const std::string axis = d == scene.dimension - 1 ? "z" : (d == 0 ? "x" : "y");
+          file.set_attribute(g, "position_" + axis, p.position[d]);
+          file.set_attribute(g, "normal_" + axis, p.normal[d]);
+        }
+    file.set_attribute(g, "units", "time s; pressure Pa (the water's on the face, the mean over each sampling "
+                                   "interval; 0 when dry)");
+  }
   // /sections/<name>: time (n), depth and velocity (n in 2D; n x bins in 3D, with the bin centres y).
   for (const auto& [name, sr] : record.sections) {
     const std::string g = "/sections/" + name;

@@ -43,6 +43,12 @@ std::map<std::string, double> compute_metrics(const Scene& scene, const Record& 
     m[name + ".peak_fx_n"] = peak_x;
     m[name + ".impulse_x_ns"] = impulse;
   }
+  for (const auto& [name, ts] : record.pressures) {
+    const PressureSummary p = summarize_pressure(ts.time, ts.values);
+    m[name + ".peak_pressure_pa"] = p.peak;
+    m[name + ".peak_pressure_time_s"] = p.peak_time;
+    m[name + ".impulse_pa_s"] = p.impulse;
+  }
   const auto& mass = record.diagnostics.at("mass");
   if (!mass.empty()) {
     m["mass_kg"] = mass.back();

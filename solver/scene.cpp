@@ -609,6 +609,8 @@ Scene parse(const json& root_json, const std::string& file) {
       inside(r, "position", g.position, dim - 1);
       g.rate_hz = r.number("rate_hz");
       g.datum = r.number("datum_m");
+      g.reading = r.choice<GaugeReading>("reading",
+                                         {{"volume", GaugeReading::kVolume}, {"connected", GaugeReading::kConnected}});
       r.finish();
       I.gauges.push_back(g);
     }
@@ -633,6 +635,51 @@ Scene parse(const json& root_json, const std::string& file) {
       l.rate_hz = r.number("rate_hz");
       r.finish();
       I.loads.push_back(l);
+    }
+    for (auto& r : inst.objects("pressure_probes")) {
+      PressureProbe p;
+      p.name = r.string("name");
+      unique(r, p.name);
+      p.position = r.vec("position", dim);
+      inside(r, "position", p.position, dim);
+      if (r.has("normal") == r.has("boundary"))
+        r.fail(r.has("normal") ? "boundary" : "normal",
+               "give the face's outward normal or the boundary the probe sits on, one of the two");
+      if (r.has("normal")) {
+        p.normal = r.vec("normal", dim);
+        double n2 = 0;
+        for (int d = 0; d < dim; ++d) n2 += p.normal[d] * p.normal[d];
+        if (!(n2 > 1e-24)) r.fail("normal", "must be a non-zero vector (|normal| > 0), the face's outward normal");
+        for (int d = 0; d < dim; ++d) p.normal[d] /= std::sqrt(n2);
+      } else {
+        // The face of a named boundary: a half-space's plane, or the box face nearest the point, which must lie
+        // on it (within half a cell).
+        const std::string name = r.string("boundary");
+        const Boundary* b = nullptr;
+        for (const auto& x : sc.boundaries)
+          if (x.name == name) b = &x;
+        if (!b) r.fail("boundary", "names no boundary of this scene ('" + name + "')");
+        const double off = shape_distance(b->shape, p.position, dim);
+        if (std::fabs(off) > 0.5 * sc.solver.dx)
+          r.fail("position", "must lie on a face of boundary '" + name + "' (within dx/2 = " + fmt(0.5 * sc.solver.dx) +
+                                 " m), is " + fmt(off) + " m from it");
+        if (b->shape.type == ShapeType::kHalfSpace) {
+          p.normal = b->shape.normal;
+        } else {
+          int axis = 0;
+          double best = -kInf, sign = 1;
+          for (int d = 0; d < dim; ++d)
+            for (const double sg : {-1.0, 1.0}) {
+              const double q = sg < 0 ? b->shape.lo[d] - p.position[d] : p.position[d] - b->shape.hi[d];
+              if (q > best) best = q, axis = d, sign = sg;
+            }
+          p.normal = Vec3d{};
+          p.normal[axis] = sign;
+        }
+      }
+      p.rate_hz = r.number("rate_hz");
+      r.finish();
+      I.pressure_probes.push_back(p);
     }
     for (auto& r : inst.objects("sections")) {
       Section c;

@@ -79,11 +79,15 @@ struct SphSettings {
   double artificial_alpha = 0.01;  // Monaghan's alpha, with viscosity "artificial"
 };
 
+// What a gauge reads (solver/connected_depth.h): the water's volume per unit area over the ground (the
+// default), or, as a wire or resistance gauge, the top of the water connected to the ground.
+enum class GaugeReading { kVolume, kConnected };
 struct Gauge {
   std::string name;
   Vec3d position{};      // horizontal position; the vertical entry is ignored
   double rate_hz = 100;
   double datum = 0.0;    // elevation is reported relative to this level (m)
+  GaugeReading reading = GaugeReading::kVolume;
 };
 struct Probe {
   std::string name;
@@ -97,6 +101,14 @@ struct Section {
   double x_m = 0;
   double rate_hz = 200;
 };
+// A pressure probe (issue 30): the water's pressure on a solid face at a point, as a flush-mounted pressure
+// sensor reads it (solver/pressure_probes.h).
+struct PressureProbe {
+  std::string name;
+  Vec3d position{};  // a point on the face
+  Vec3d normal{};    // the face's outward normal (out of the solid, into the water), unit length
+  double rate_hz = 1000;
+};
 struct LoadCell {
   std::string name;
   std::string boundary;  // name of the boundary whose grid-node reaction is summed
@@ -107,6 +119,7 @@ struct Instruments {
   std::vector<Gauge> gauges;
   std::vector<Probe> probes;
   std::vector<LoadCell> loads;
+  std::vector<PressureProbe> pressure_probes;
   std::vector<Section> sections;
   double diagnostics_rate_hz = 100;
   double snapshot_rate_hz = 0;  // 0: no particle snapshots

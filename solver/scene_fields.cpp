@@ -157,7 +157,12 @@ const ObjectDoc& gauge_doc() {
            .in_unit("m")
            .note("inside the domain"),
        number("rate_hz", "sampling rate").above(0).at_most(1e6).def(100.0).in_unit("Hz"),
-       number("datum_m", "elevation reported relative to this level").in(-1e4, 1e4).def(0.0).in_unit("m")}};
+       number("datum_m", "elevation reported relative to this level").in(-1e4, 1e4).def(0.0).in_unit("m"),
+       choice("reading", {"volume", "connected"},
+              "volume: the water's volume per unit area over the ground (spray counts as the water it is); "
+              "connected: as a wire gauge, the top of the water connected to the ground, walking up the "
+              "gauge's one-cell column and stopping at the first gap over one cell (docs/results.md)")
+           .def("volume")}};
   return d;
 }
 
@@ -177,6 +182,27 @@ const ObjectDoc& load_doc() {
       "A load cell: the reaction the water exerts on a boundary (its grid nodes' sum).",
       {string("name", "name, unique among the instruments").needed().eg("L9"),
        string("boundary", "the name of a boundary of the scene").needed(),
+       number("rate_hz", "sampling rate").above(0).at_most(1e7).def(1000.0).in_unit("Hz")}};
+  return d;
+}
+
+const ObjectDoc& pressure_probe_doc() {
+  static const ObjectDoc d{
+      "instruments.pressure_probes[]",
+      "A pressure probe: the water's pressure on a solid face at a point, as a flush-mounted sensor reads it. "
+      "The mean, over each sampling interval, of the particles' pressure within one cell of the point (a disc "
+      "of radius 1.5 dx on the face, a layer 1 dx deep), carried to the face with the hydrostatic gradient; "
+      "0 when dry (docs/results.md).",
+      {string("name", "name, unique among the instruments").needed().eg("PS1"),
+       vector("position", 2, 3, "a point on the face").needed().in_unit("m").note("inside the domain"),
+       vector("normal", 2, 3, "the face's outward normal, out of the solid into the water (normalised)")
+           .needed_when("without boundary")
+           .note("non-zero"),
+       string("boundary",
+              "instead of normal: the boundary whose face the probe sits on (a half-space's plane, or the box "
+              "face nearest the point), within dx/2 of it")
+           .needed_when("without normal")
+           .eg("column"),
        number("rate_hz", "sampling rate").above(0).at_most(1e7).def(1000.0).in_unit("Hz")}};
   return d;
 }
@@ -203,6 +229,7 @@ const ObjectDoc& instruments_doc() {
       {object_array("gauges", gauge_doc(), "wave gauges"),
        object_array("probes", probe_doc(), "velocity probes"),
        object_array("loads", load_doc(), "load cells"),
+       object_array("pressure_probes", pressure_probe_doc(), "pressure probes on solid faces"),
        object_array("sections", section_doc(), "cross-sections"),
        number("diagnostics_rate_hz", "rate of the energy, mass and momentum diagnostics")
            .above(0)

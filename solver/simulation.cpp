@@ -40,6 +40,7 @@ void checkpoint_state(StateArchive& ar, Record& r) {
   ar(r.gauges);
   ar(r.probes);
   ar(r.loads);
+  ar(r.pressures);
   ar(r.sections);
   ar(r.diagnostics);
 }

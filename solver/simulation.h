@@ -46,6 +46,7 @@ struct Record {
   std::map<std::string, TimeSeries> gauges;  // water elevation above the gauge's datum (m)
   std::map<std::string, TimeSeries> probes;  // velocity (m/s), D components
   std::map<std::string, TimeSeries> loads;   // force of the water on a boundary (N; N/m in 2D), D components
+  std::map<std::string, TimeSeries> pressures;  // pressure probes: the water's pressure on a face (Pa)
   std::map<std::string, SectionSeries> sections;
   std::map<std::string, std::vector<double>> diagnostics;  // time, mass, kinetic, potential, elastic, total, dt, max_speed, step
 };

@@ -184,6 +184,67 @@ TEST_F(GaugesCli, InputErrorsExitTwoNamingTheFileAndGauge) {
   EXPECT_FALSE(fs::exists(svg));
 }
 
+// Pressure probes (issue 30): a triangular pulse of 1000 Pa, 0.02 s wide at its base, at 0.05 s, sampled at
+// 1 kHz (impulse 1000 Pa x 0.01 s = 10 Pa s), gets a panel after the gauges and a line with its peak and
+// impulse; a run with pressure probes and no gauges plots them alone.
+TEST_F(GaugesCli, PressureProbesAfterTheGauges) {
+  for (const char* run : {"run_c", "run_d"}) {
+    fs::create_directories(dir_ / run);
+    flume::h5::RunFile f((dir_ / run / "result.h5").string());
+    if (std::string(run) == "run_c") write_gauge(f, "WG1", 0.1, [](double t) { return 0.01 * t; });
+    std::vector<double> t, p;
+    for (int i = 0; i <= 100; ++i) {
+      t.push_back(i / 1000.0);
+      p.push_back(1000 * std::max(0.0, 1 - std::fabs(i - 50) / 10.0));
+    }
+    f.write_series("/pressure_probes/PS1", "time", t);
+    f.write_series("/pressure_probes/PS1", "pressure", p);
+    f.finalize();
+  }
+  const fs::path svg = dir_ / "p.svg";
+  Result r = gauges({(dir_ / "run_c").string(), "--out", svg.string()});
+  ASSERT_EQ(r.rc, 0) << r.err;
+  std::vector<std::string> p = panels(read_file(svg));
+  ASSERT_EQ(p.size(), 2u);
+  EXPECT_NE(p[0].find("eta (m)"), std::string::npos);
+  EXPECT_NE(p[1].find("p (Pa)"), std::string::npos);
+  EXPECT_LT(p[1].find(">PS1<"), p[1].size());
+  EXPECT_NE(r.out.find("PS1 run_c: peak 1000.0 Pa at 0.0500 s, impulse 10.000 Pa s\n"), std::string::npos) << r.out;
+  EXPECT_LT(r.out.find("WG1 run_c"), r.out.find("PS1 run_c"));
+
+  r = gauges({(dir_ / "run_d").string(), "--gauges", "PS1", "--out", svg.string()});
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_EQ(panels(read_file(svg)).size(), 1u);
+  EXPECT_NE(r.out.find("PS1 run_d: peak 1000.0 Pa"), std::string::npos) << r.out;
+}
+
+// `flume export --csv` writes the pressure probes beside the gauges, one row per sample.
+TEST_F(GaugesCli, ExportWritesPressureProbes) {
+  fs::create_directories(dir_ / "run_p");
+  {
+    flume::h5::RunFile f((dir_ / "run_p" / "result.h5").string());
+    write_gauge(f, "WG1", 0.02, [](double) { return 0.0; });
+    f.write_series("/pressure_probes/PS1", "time", {0.0, 0.001, 0.002});
+    f.write_series("/pressure_probes/PS1", "pressure", {0.0, 12.5, 0.25});
+    f.finalize();
+  }
+  const Result r = run({FLUME_EXE, "export", (dir_ / "run_p").string(), "--csv", (dir_ / "csv").string()}, dir_);
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_EQ(read_file(dir_ / "csv" / "pressure_probes.csv"), "name,time,pressure\nPS1,0,0\nPS1,0.001,12.5\nPS1,0.002,0.25\n");
+  EXPECT_TRUE(fs::exists(dir_ / "csv" / "gauges.csv"));
+}
+
+TEST(PressureSummary, PeakTimeAndImpulseSkipNonFiniteSamples) {
+  const double nan = std::nan("");
+  // Each sample is the mean over the interval before it: impulse 0.5 x 1 + 2 x 1 + 1 x 2 (the NaN's interval
+  // is lost with it).
+  const auto s = flume::summarize_pressure({0, 1, 2, 3, 5}, {0, 0.5, 2, nan, 1});
+  EXPECT_DOUBLE_EQ(s.peak, 2);
+  EXPECT_DOUBLE_EQ(s.peak_time, 2);
+  EXPECT_DOUBLE_EQ(s.impulse, 0.5 + 2 + 2);
+  EXPECT_DOUBLE_EQ(flume::summarize_pressure({}, {}).peak, 0);
+}
+
 TEST(GaugeSummary, PeakAndArrivalSkipNonFiniteSamples) {
   const double nan = std::nan("");
   const auto s = flume::summarize_gauge({0, 1, 2, 3, 4}, {nan, 0.25, 0.252, nan, 0.3}, 0.005);

@@ -131,7 +131,8 @@ TEST(SceneSchema, EveryDescribedFieldIsAcceptedByTheParser) {
        {"scenes/debris/bore_container.json", "scenes/dam_break/martin_moyce_2d.json",
         "scenes/waseda/waseda_2d.json", "scenes/waseda/waseda_3d.json", "scenes/waseda/waseda_3d_half.json",
         "scenes/waseda/waseda_apron.json", "scenes/debris/grounding_sheet.json",
-        "tests/schema/box_boundary_2d.json", "tests/schema/basin_debris_3d.json"})
+        "tests/schema/box_boundary_2d.json", "tests/schema/basin_debris_3d.json",
+        "tests/schema/probe_on_boundary_2d.json"})
     bases.push_back(json::parse(slurp(kSource + "/" + f)));
   expect_every_field_accepted(scene_doc(), bases, [](json d) -> std::string {
     // An inflow record is given at run time (--set inflow.record=RUN/result.h5): named here, so that the only

@@ -66,6 +66,8 @@ void expect_same_record(const Record& a, const Record& b, size_t n) {
   for (const auto& [k, s] : a.gauges) expect_same_series(s, b.gauges.at(k), "gauge " + k);
   for (const auto& [k, s] : a.probes) expect_same_series(s, b.probes.at(k), "probe " + k);
   for (const auto& [k, s] : a.loads) expect_same_series(s, b.loads.at(k), "load " + k);
+  ASSERT_EQ(a.pressures.size(), b.pressures.size());
+  for (const auto& [k, s] : a.pressures) expect_same_series(s, b.pressures.at(k), "pressure probe " + k);
   for (const auto& [k, s] : a.sections) {
     EXPECT_EQ(s.time, b.sections.at(k).time) << k;
     EXPECT_EQ(s.depth, b.sections.at(k).depth) << k;
@@ -139,6 +141,30 @@ void expect_exact_resume(const Scene& scene, double t_stop, const Factory& make 
     }
   }
 }
+
+// A 2D dam break against a wall with pressure probes on it (their interval sums and clocks are state) and a
+// connected gauge, stopped between two of the probes' samples as the front runs up the wall.
+Scene dam_probe_scene() {
+  return parse_scene_text(R"({"name": "dam_probe", "dimension": 2,
+    "domain": {"lo": [-0.05, -0.05], "hi": [0.65, 0.4], "walls": "slip"},
+    "solver": {"dx": 0.01, "ppc": 4, "precision": "float", "end_time": 0.3},
+    "fluid": {"bulk_modulus": 2.0e5, "jbar_psi": 0.9},
+    "water": [{"lo": [0, 0], "hi": [0.2, 0.2]}],
+    "boundaries": [
+      {"name": "floor", "type": "half_space", "point": [0, 0], "normal": [0, 1], "condition": "slip"},
+      {"name": "wall", "type": "half_space", "point": [0.6, 0], "normal": [-1, 0], "condition": "slip"}],
+    "instruments": {"gauges": [{"name": "G1w", "position": [0.5], "reading": "connected"}],
+      "pressure_probes": [{"name": "PS1", "position": [0.6, 0.01], "normal": [-1, 0], "rate_hz": 300},
+                          {"name": "PS2", "position": [0.5, 0.0], "normal": [0, 1]}]}})",
+                                       "dam_probe.json");
+}
+TEST(Checkpoint, ResumedPressureProbesRepeatTheUninterruptedRun) { expect_exact_resume(dam_probe_scene(), 0.2); }
+#ifdef FLUME_CUDA_EMULATION_AVAILABLE
+// The CUDA backend reads its instruments from host mirrors of the particles (solver/cuda/mpm_cuda.cu).
+TEST(Checkpoint, CudaEmulationResumedPressureProbesRepeatTheUninterruptedRun) {
+  expect_exact_resume(dam_probe_scene(), 0.2, [](const Scene& s) { return make_cuda_host_emulation(s, {}); });
+}
+#endif
 
 // The 2D basin: the reservoir held by its vacuum, then released through the gate; stopped mid-release.
 TEST(Checkpoint, ResumedBasinRepeatsTheUninterruptedRun) {
