@@ -20,8 +20,8 @@ except ImportError:
 flume, src = sys.argv[1], sys.argv[2]
 # The shipped documents of each kind the command describes.
 shipped = {
-    "scene": ["scenes/dam_break/*.json", "scenes/debris/*.json", "scenes/waseda/*.json", "bench/scenes/*.json",
-              "tests/examples/*.json", "tests/schema/*.json"],
+    "scene": ["scenes/dam_break/*.json", "scenes/debris/*.json", "scenes/validation/*.json", "scenes/waseda/*.json",
+              "bench/scenes/*.json", "tests/examples/*.json", "tests/schema/*.json"],
     "campaign": ["scenes/campaigns/*.json"],
     "calibration": ["docs/calibration.md"],  # no spec file ships: the spec example of the docs (```json blocks)
     "study": ["scenes/studies/*.json"],
