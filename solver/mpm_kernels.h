@@ -377,8 +377,9 @@ FLUME_HD void ghost_box(const double* x, const double* lo, const double* hi, dou
   for (int a = 0; a < D; ++a) {
     const double below = (x[a] - lo[a]) / dx, above = (hi[a] - x[a]) / dx;
     const unsigned seen = axes;
-    if (below < reach) ghost_axis_step(a, below, -1, offset, axes, ambiguous);
-    if (above < reach) ghost_axis_step(a, above, 1, offset, axes, ambiguous);
+    const bool thin = below <= 2 && above <= 2;  // a thin wall along a: undefined, as wall_faces holds it by both
+    if (below < reach || thin) ghost_axis_step(a, below, -1, offset, axes, ambiguous);
+    if (above < reach || thin) ghost_axis_step(a, above, 1, offset, axes, ambiguous);
     stepped += axes != seen;
   }
   if (stepped > 1) {
@@ -543,11 +544,12 @@ FLUME_HD T half_space_distance(const T* x, const T* point, const T* n, T* normal
 //
 // A node inside a box is held by every face whose outside water can reach it, not only by the nearest: near
 // the quay's top edge the nearest face is the top, and a node constrained by it alone would let the basin's
-// water flow sideways into the wall. Inside a thin wall, such as the gate panel, both faces hold it. Water
-// beyond a face reaches a node less than kStencilReach cells in from it; a face deeper than that has nothing
-// to stop there, and holding the node by it anyway stopped the sheet flowing over the quay's crest (a node
-// 1.5 cells behind the front face and under the top lost its streamwise velocity; docs/validation.md,
-// section 1). Returns the number of normals written to n (0: the node is free).
+// water flow sideways into the wall. Inside a thin wall (both faces of an axis within two cells), such as the
+// gate panel, both faces hold it. Otherwise water beyond a face reaches a node less than kStencilReach cells in
+// from it; a face deeper than that has nothing to stop there, and holding the node by it anyway stopped the
+// sheet flowing over the quay's crest (a node 1.5 cells behind the front face and under the top lost its
+// streamwise velocity; docs/validation.md, section 1). Returns the number of normals written to n (0: the node
+// is free).
 //
 // So a wall face between two grid lines acts from the next node inside it (a `subcell` boundary resolves it:
 // subcell_cover below; docs/calibration.md).
@@ -562,13 +564,15 @@ FLUME_HD int wall_faces(const double* x, bool box, const double* a, const double
     return 1;
   }
   int count = 0;
-  for (int ax = 0; ax < D; ++ax)
+  for (int ax = 0; ax < D; ++ax) {
+    const bool thin = x[ax] - a[ax] <= 2 * dx && b[ax] - x[ax] <= 2 * dx;
     for (int side = 0; side < 2; ++side) {
       const double depth = side == 0 ? x[ax] - a[ax] : b[ax] - x[ax];  // distance in from this face
-      if (depth > kStencilReach * dx - tol) continue;
+      if (thin ? depth > 2 * dx : depth > kStencilReach * dx - tol) continue;
       for (int d = 0; d < D; ++d) n[count][d] = d == ax ? (side == 0 ? -1.0 : 1.0) : 0.0;
       ++count;
     }
+  }
   if (count == 0) {  // deep inside: the nearest face
     for (int d = 0; d < D; ++d) n[0][d] = nd[d];
     count = 1;
