@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "solver/bspline_weight.h"
 #include "solver/scene.h"
 #include "solver/checkpoint.h"
 #include "solver/connected_depth.h"
@@ -33,12 +34,6 @@ inline double ground_level(const Scene& s, const Vec3d& p) {
     }
   }
   return z;
-}
-
-// Quadratic B-spline weight of a distance q in cells.
-inline double bspline_weight(double q) {
-  q = std::fabs(q);
-  return q < 0.5 ? 0.75 - q * q : (q < 1.5 ? 0.5 * (1.5 - q) * (1.5 - q) : 0.0);
 }
 
 // Whether point p lies inside a solid of the scene (a boundary box, or behind a boundary plane) or outside the

@@ -26,17 +26,12 @@
 #include <omp.h>
 #endif
 
+#include "solver/bspline_weight.h"
 #include "solver/checkpoint.h"
 #include "solver/scene.h"
 #include "solver/simulation.h"
 
 namespace flume {
-
-// The quadratic B-spline weight of a distance q in cells (as bspline_weight in solver/instruments.h).
-inline double probe_kernel(double q) {
-  q = std::fabs(q);
-  return q < 0.5 ? 0.75 - q * q : (q < 1.5 ? 0.5 * (1.5 - q) * (1.5 - q) : 0.0);
-}
 
 template <class Solver>
 class PressureProbeSet {
@@ -91,7 +86,7 @@ class PressureProbeSet {
         if (sn < -0.5 * dx || sn >= dx) continue;
         double t2 = 0;
         for (int d = 0; d < D; ++d) t2 += (r[d] - sn * p.normal[d]) * (r[d] - sn * p.normal[d]);
-        const double w = probe_kernel(std::sqrt(t2) * inv_dx);
+        const double w = bspline_weight(std::sqrt(t2) * inv_dx);
         if (w <= 0) continue;
         double head = 0;  // rho g . (x_face - x_p)
         for (int d = 0; d < D; ++d) head -= g[d] * r[d];
