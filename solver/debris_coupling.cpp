@@ -54,29 +54,7 @@ DebrisCoupling::DebrisCoupling(const Scene& scene)
 }
 
 int DebrisCoupling::locate(const double x[3], double tol, double n[3]) const {
-  const auto& views = world_.box_views();
-  int best = -1;
-  // A node exactly tol out (a face on a grid line, a band of whole cells) is in the band whatever the round-off
-  // of the face's position: without the margin one side of a box could keep its nodes and the opposite side
-  // lose them.
-  double best_d = tol > 0 ? tol * (1 + 1e-9) : tol;
-  for (int b = 0; b < int(views.size()); ++b) {
-    const auto& v = views[b];
-    const double r2 = (x[0] - v.centre[0]) * (x[0] - v.centre[0]) + (x[1] - v.centre[1]) * (x[1] - v.centre[1]) +
-                      (x[2] - v.centre[2]) * (x[2] - v.centre[2]);
-    // The bounding sphere grown by tol: a node tol outside a face may lie beyond the bare half-diagonal (one a
-    // cell off the Waseda container's end faces does), and culling it there dropped the band's nodes round
-    // the box's ends, edges and corners from the coupling and from the film's rim.
-    const double reach = radius_[b] + std::max(tol, 0.0);
-    if (r2 > reach * reach + 1e-12) continue;
-    const double d = box_signed_distance(v, x);
-    if (d <= best_d) {
-      best_d = d;
-      best = b;
-    }
-  }
-  if (best >= 0) box_outward_normal(views[best], x, n);
-  return best;
+  return mpm::locate_box(world_.box_views().data(), radius_.data(), static_cast<int>(radius_.size()), x, tol, n);
 }
 
 bool DebrisCoupling::in_static_solid(const Eigen::Vector3d& x) const {

@@ -42,28 +42,19 @@
 // the patch, a static solid needs none. It is a sub-grid closure of the gap, not a formula for buoyancy: the
 // pressure is the water's own, read off the nodes.
 //
-// Deterministic: nodes are summed in grid order whatever the thread count. CPU only for now.
+// Deterministic: nodes are summed in grid order whatever the thread count. The per-node and per-particle
+// bodies both backends run are in solver/mpm/debris_k.h; this class is the host side.
 #pragma once
 #include <cstdint>
 #include <memory>
 #include <vector>
 
+#include "solver/mpm/debris_k.h"
 #include "solver/rigid/debris_recorder.h"
 #include "solver/rigid/rigid_world.h"
 #include "solver/scene.h"
 
 namespace flume {
-
-// A grid node inside a debris box, as the grid update found it.
-struct CouplingNode {
-  uint64_t id = 0;  // grid node's storage index (the sort key)
-  int body = -1;
-  double x[3] = {0, 0, 0};  // node position
-  double n[3] = {0, 0, 0};  // box's outward normal at the node (its nearest face)
-  double m = 0;             // water mass on the node
-  double p = 0;             // water pressure on the node (Pa): the equation of state at its mass-weighted strain
-  double v[3] = {0, 0, 0};  // node velocity before the exchange; after exchange(): the projected velocity
-};
 
 class DebrisCoupling {
  public:
@@ -74,6 +65,7 @@ class DebrisCoupling {
   const DebrisRecorder& recorder() const { return *recorder_; }
   const std::vector<RigidBoxView>& views() const { return world_.box_views(); }
   double bounding_radius(int body) const { return radius_[body]; }
+  const std::vector<double>& bounding_radii() const { return radius_; }
 
   // The box holding point x, the deepest when several do (signed distance <= tol), or -1. Writes its outward
   // normal at x.

@@ -670,17 +670,10 @@ class MpmSolver final : public Simulation {
     // node is known, by the implicit exchange (debris_coupling.h).
     if (near_debris) {
       CouplingNode c;
-      for (int d = 0; d < D; ++d) c.x[d] = grid_lo_[d] + node[d] * dx_;
-      c.body = debris_->locate(c.x, coupling_band_ * dx_, c.n);
-      if (c.body >= 0) {
-        c.id = idx;
-        c.m = double(m);
-        // The node holds the strain less its hydrostatic part (mpm::hydrostatic_strain, the well-balanced
-        // J-bar); the pressure is the equation of state at the whole strain.
-        double slope[D];
-        for (int d = 0; d < D; ++d) slope[d] = double(strain_slope_[d]);
-        c.p = law_d_.pressure(double(acc[1 + D] / m) + mpm::hydrostatic_strain<D>(c.x, slope));
-        for (int d = 0; d < D; ++d) c.v[d] = double(v[d]);
+      const auto& views = debris_->views();
+      const T e_node = acc[1 + D] / m;
+      if (mpm::coupling_node<D, T>(views.data(), debris_->bounding_radii().data(), int(views.size()), xn,
+                                   coupling_band_ * dx_, idx, m, e_node, v, law_d_, strain_slope_, c)) {
         my_coupling->push_back(c);
         on_wall = 1;
       }
@@ -916,37 +909,20 @@ class MpmSolver final : public Simulation {
   // A particle inside a box goes back to its surface, without the velocity that approached it; the momentum
   // it loses is added to acc[body] (impulse, then moment about the origin) for the box (debris_coupling.h).
   void push_out_of_debris(size_t i, double* acc) {
-    if constexpr (D == 3) {
-      double x[3], n[3];
-      for (int d = 0; d < 3; ++d) x[d] = x_[d][i];
-      const int b = debris_->locate(x, 0.0, n);
-      if (b < 0) return;
-      const RigidBoxView& view = debris_->views()[b];
-      const double depth = -box_signed_distance(view, x);
-      for (int d = 0; d < 3; ++d) {
-        x[d] += depth * n[d];
-        x_[d][i] = T(x[d]);
-      }
-      double vb[3];
-      box_surface_velocity(view, x, vb);
-      double rel = 0;
-      for (int d = 0; d < 3; ++d) rel += (double(v_[d][i]) - vb[d]) * n[d];
-      if (rel >= 0) return;
-      double J[3];
-      for (int d = 0; d < 3; ++d) {
-        v_[d][i] = T(double(v_[d][i]) - rel * n[d]);
-        // the box's share: the water's lost momentum (rel < 0: into the box)
-        J[d] = rho_ * double(vol_[i]) * rel * n[d];
-      }
-      double* a = acc + b * 6;
-      for (int d = 0; d < 3; ++d) a[d] += J[d];
-      a[3] += x[1] * J[2] - x[2] * J[1];
-      a[4] += x[2] * J[0] - x[0] * J[2];
-      a[5] += x[0] * J[1] - x[1] * J[0];
-    } else {
-      (void)i;
-      (void)acc;
+    double x[3] = {0, 0, 0}, v[3] = {0, 0, 0}, share[6];
+    for (int d = 0; d < D; ++d) {
+      x[d] = x_[d][i];
+      v[d] = v_[d][i];
     }
+    const auto& views = debris_->views();
+    const int b = mpm::push_out_of_box(views.data(), debris_->bounding_radii().data(), int(views.size()),
+                                       rho_ * double(vol_[i]), x, v, share);
+    if (b < 0) return;
+    for (int d = 0; d < D; ++d) {
+      x_[d][i] = T(x[d]);
+      v_[d][i] = T(v[d]);
+    }
+    for (int k = 0; k < 6; ++k) acc[b * 6 + k] += share[k];
   }
 
   // The debris exchange: the nodes in boxes, in grid order (so the sums do not depend on the thread count),

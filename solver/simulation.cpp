@@ -60,9 +60,6 @@ std::unique_ptr<Simulation> make_simulation(const Scene& scene, const Simulation
     return make_sph_simulation(scene, options);
   }
   if (options.backend == Backend::kCuda) {
-    if (scene.debris.present)
-      throw InputError(scene.file, "debris",
-                       "the CUDA backend does not couple debris yet: run this scene with --backend cpu");
 #ifdef FLUME_HAVE_CUDA
     if (!cuda_device_present()) throw InputError("--backend", "cuda", "no CUDA device is present on this machine");
     return make_cuda_simulation(scene, options);

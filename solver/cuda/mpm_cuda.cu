@@ -6,7 +6,12 @@
 //
 // Inflow and checkpoints go through the host: the inflow boundary (solver/inflow.h) works on host arrays, so
 // the particles are copied down and back around it each step; a checkpoint copies the particles and their
-// sort keys. Debris are not coupled yet (make_simulation refuses them: docs/solver.md).
+// sort keys.
+//
+// Debris. The rigid bodies stay on the host (DebrisCoupling, Bullet contact). Each step the device finds the
+// nodes in the boxes' bands and the particles inside a box (mpm/debris_k.h, the CPU's bodies), compacts them
+// in storage order and copies only those down: the host solves the exchange and steps the boxes, and the
+// projected node velocities go back up. Storage order is the CPU's grid order, so the sums are the CPU's.
 //
 // Layout. Particles are structure-of-arrays device vectors, sorted by the grid block (kBlock^D nodes) that
 // holds their stencil's base node, exactly as on the CPU. The grid is block-sparse: after each sort the
@@ -47,6 +52,7 @@
 #include <cfloat>
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <sstream>
 #include <vector>
@@ -57,12 +63,14 @@
 
 #include "solver/interleave_axes.h"
 #include "solver/checkpoint.h"
+#include "solver/debris_coupling.h"
 #include "solver/cuda/mpm_cuda.h"
 #include "solver/inflow.h"
 #include "solver/instruments.h"
 #include "solver/mpm/audit.h"
 #include "solver/mpm/blocks_k.h"
 #include "solver/mpm/boundaries.h"
+#include "solver/mpm/debris_k.h"
 #include "solver/mpm/diagnostics_k.h"
 #include "solver/mpm/launch.h"
 #include "solver/mpm/node_k.h"
@@ -384,6 +392,103 @@ struct GhostMirrorUpdate {
   }
 };
 
+// Debris (mpm/debris_k.h): the boxes as the host last stepped them.
+struct Boxes {
+  const RigidBoxView* views;
+  const double* radius;
+  int count;
+};
+
+// After the update, before the ghosts: a node with water in a box's band is that box's moving-wall node (it
+// stays out of the J-bar average, as a wall node, and no ghost pairs with it). `body` gets the box or -1.
+template <int D, typename T>
+struct CouplingFind {
+  View<D, T> s;
+  Boxes boxes;
+  double band;
+  int32_t* body;
+  FLUME_HD void operator()(size_t idx) const {
+    body[idx] = -1;
+    const T m = s.grid[idx];
+    if (!(m > T(0))) return;
+    int node[D];
+    s.node_of(idx, node);
+    CouplingNode c;
+    if (!fill(idx, node, c)) return;
+    body[idx] = c.body;
+    s.gwall[idx] = 1;
+  }
+  FLUME_HD bool fill(size_t idx, const int* node, CouplingNode& c) const {
+    double xn[D];
+    for (int d = 0; d < D; ++d) xn[d] = s.grid_lo_d[d] + node[d] * s.dx_d;
+    T v[D];
+    for (int d = 0; d < D; ++d) v[d] = s.grid[(1 + d) * s.nodes + idx];
+    return mpm::coupling_node<D, T>(boxes.views, boxes.radius, boxes.count, xn, band, idx, s.grid[idx],
+                                    s.grid[(1 + D) * s.nodes + idx], v, s.law_d, s.strain_slope, c);
+  }
+};
+// The nodes CouplingFind flagged, in storage order, as the host's exchange takes them.
+template <int D, typename T>
+struct CouplingGather {
+  CouplingFind<D, T> find;
+  const int64_t* index;
+  CouplingNode* out;
+  FLUME_HD void operator()(size_t k) const {
+    int node[D];
+    find.s.node_of(index[k], node);
+    find.fill(index[k], node, out[k]);
+  }
+};
+// The exchange's projected velocities back into the grid.
+template <int D, typename T>
+struct CouplingScatter {
+  View<D, T> s;
+  const CouplingNode* nodes;
+  FLUME_HD void operator()(size_t k) const {
+    for (int d = 0; d < D; ++d) s.grid[(1 + d) * s.nodes + nodes[k].id] = T(nodes[k].v[d]);
+  }
+};
+// After G2P: the particles inside a box (`body` gets the box or -1), then those pushed back to its surface
+// with their share for the box, in particle order.
+template <int D, typename T>
+struct PushFind {
+  View<D, T> s;
+  Boxes boxes;
+  int32_t* body;
+  FLUME_HD void operator()(size_t i) const {
+    double x[3] = {0, 0, 0}, n[3];
+    for (int d = 0; d < D; ++d) x[d] = s.x[d][i];
+    body[i] = mpm::locate_box(boxes.views, boxes.radius, boxes.count, x, 0.0, n);
+  }
+};
+template <int D, typename T>
+struct PushOut {
+  View<D, T> s;
+  Boxes boxes;
+  const int64_t* index;
+  double* share;  // 6 per entry: impulse, then its moment about the origin
+  int32_t* body;  // per entry
+  int32_t* block; // per entry: the particle's block, for the CPU's per-block partial sums
+  FLUME_HD void operator()(size_t k) const {
+    const size_t i = static_cast<size_t>(index[k]);
+    double x[3] = {0, 0, 0}, v[3] = {0, 0, 0};
+    for (int d = 0; d < D; ++d) {
+      x[d] = s.x[d][i];
+      v[d] = s.v[d][i];
+    }
+    body[k] = mpm::push_out_of_box(boxes.views, boxes.radius, boxes.count, s.rho_d * double(s.vol[i]), x, v,
+                                   share + 6 * k);
+    block[k] = s.pblk[i];
+    for (int d = 0; d < D; ++d) {
+      s.x[d][i] = T(x[d]);
+      s.v[d][i] = T(v[d]);
+    }
+  }
+};
+struct IsBody {
+  FLUME_HD bool operator()(int32_t b) const { return b >= 0; }
+};
+
 // G2P, one particle: velocity, APIC matrix, well-balanced J-bar strain (wall nodes left out of the average
 // and the rest renormalised) and position. As MpmSolver::g2p, in the same summation order.
 template <int D, typename T>
@@ -528,6 +633,12 @@ class MpmCuda final : public Simulation {
     psi_ = T(f.jbar_psi);
     for (int d = 0; d < D; ++d) strain_slope_[d] = T(-f.density * scene.solver.gravity[d] / f.bulk_modulus);
     c_ = mpm::sound_speed(f.bulk_modulus, f.density);
+    if (scene.debris.present) {
+      if constexpr (D != 3) throw InputError(scene.file, "debris", "debris need a 3D scene");
+      debris_ = std::make_unique<DebrisCoupling>(scene_);
+      const auto& r = debris_->bounding_radii();
+      box_radius_.assign(r.begin(), r.end());
+    }
     seed_particles();
     if (scene.inflow.present) {  // the buffer of the inflow boundary (solver/inflow.h), on host arrays
       to_host();
@@ -563,11 +674,14 @@ class MpmCuda final : public Simulation {
     mpm::parallel_for(n_, P2G<D, T>{s, T(dt), lift});
     if (s.has_sym) mpm::parallel_for(s.nodes, SymmetryFold<D, T>{s});
     mpm::parallel_for(s.nodes, GridUpdate<D, T>{s, T(dt)});
+    if (debris_) find_coupling_nodes(s);
     mpm::parallel_for(s.nodes, GhostExchange<D, T>{s});
     mpm::parallel_for(s.nodes, GhostMirrorUpdate<D, T>{s});
     if (s.has_sym) mpm::parallel_for(s.nodes, SymmetryMirror<D, T>{s});
     if (has_loads_) thr::copy(impulse_.begin(), impulse_.end(), load_impulse_.begin());
+    if (debris_) couple_debris(s, double(dt));
     mpm::parallel_for(n_, G2P<D, T>{s, g2p_constants(s, T(dt))});
+    if (debris_) push_out_of_debris(s);
     host_fresh_ = false;
     audit(T(dt));
     time_ += dt;
@@ -588,6 +702,8 @@ class MpmCuda final : public Simulation {
   double last_dt() const override { return dt_; }
   long steps() const override { return steps_; }
   size_t particle_count() const override { return n_; }
+  const DebrisCoupling* debris() const override { return debris_.get(); }
+  DebrisCoupling* debris() override { return debris_.get(); }
   double total_mass() const override { return mass_; }
   const Record& record() const override { return instruments_.record(); }
   const std::string& message() const override { return message_; }
@@ -681,7 +797,8 @@ class MpmCuda final : public Simulation {
     instruments_.checkpoint(ar);
     ar.expect("inflow", inflow_ ? 1 : 0);
     if (inflow_) inflow_->checkpoint(ar);
-    ar.expect("debris", 0);
+    ar.expect("debris", debris_ ? 1 : 0);
+    if (debris_) debris_->checkpoint(ar);
     if (!ar.loading()) return;
     n_ = x_[0].size();
     const auto bad = [&](size_t size) { return size != n_; };
@@ -718,11 +835,12 @@ class MpmCuda final : public Simulation {
 
   struct Energy {
     double kinetic = 0, potential = 0, elastic = 0;
-    double total() const { return kinetic + potential + elastic; }
+    double debris = 0;  // the boxes' kinetic and potential energy
+    double total() const { return kinetic + potential + elastic + debris; }
   };
   Energy energy() const {
     const Audit a = reduce_audit();
-    return {a.ke, a.pe, a.el};
+    return {a.ke, a.pe, a.el, debris_ ? debris_->energy() : 0.0};
   }
   const Energy& last_energy() const { return last_energy_; }
   const Scene& scene() const { return scene_; }
@@ -734,7 +852,15 @@ class MpmCuda final : public Simulation {
     const int per_axis = static_cast<int>(std::lround(std::pow(scene_.solver.ppc, 1.0 / D)));
     spacing_ = dx_ / per_axis;
     rho_ = scene_.fluid.density;
-    const Seeds seeds = seed_water<D>(scene_, spacing_);
+    // Water is not seeded inside a debris box: the box displaces it.
+    std::function<bool(const double*)> displaced;
+    if (debris_)
+      displaced = [this](const double* p) {
+        double x3[3] = {0, 0, 0}, nn[3];
+        for (int d = 0; d < D; ++d) x3[d] = p[d];
+        return debris_->locate(x3, 0.0, nn) >= 0;
+      };
+    const Seeds seeds = seed_water<D>(scene_, spacing_, displaced);
     n_ = seeds.size();
     for (int d = 0; d < D; ++d) {
       const std::vector<T> xd(seeds.x[d].begin(), seeds.x[d].end());
@@ -762,6 +888,9 @@ class MpmCuda final : public Simulation {
   void setup_boundaries() {
     const std::vector<Wall<D, T>> walls = mpm::scene_walls<D, T>(scene_);
     has_sym_ = mpm::scene_symmetry_plane<D>(scene_, grid_lo_, dx_, sym_) ? 1 : 0;
+    if (has_sym_ && debris_)
+      throw InputError(scene_.file, "boundaries", "a symmetry plane cannot be used with debris (the bodies would "
+                                                  "need their mirror images): model the full span");
     walls_.assign(walls.begin(), walls.end());
     n_walls_ = static_cast<int>(walls.size());
     container_ = mpm::scene_container<D, T>(scene_);
@@ -905,12 +1034,75 @@ class MpmCuda final : public Simulation {
       fail(mpm::bad_particle_message(a.bad_kind, t_new, steps_ + 1, double(dt), a.bad, xp, D));
       return;
     }
-    const double e = a.ke + a.pe + a.el;
+    const double e_debris = debris_ ? debris_->energy() : 0.0;
+    const double e = a.ke + a.pe + a.el + e_debris;
     if (e > energy0_ + energy_slack_) {
       sync_host();
       fail(mpm::energy_growth_message<D>(t_new, steps_ + 1, e, energy0_, max_speed_, hx_, hv_, n_));
     }
-    last_energy_ = {a.ke, a.pe, a.el};
+    last_energy_ = {a.ke, a.pe, a.el, e_debris};
+  }
+
+  // Debris, as MpmSolver::grid_update and MpmSolver::g2p (debris_coupling.h): the boxes as the host holds them.
+  Boxes boxes() {
+    const auto& views = debris_->views();
+    box_views_.assign(views.begin(), views.end());
+    return {raw(box_views_), raw(box_radius_), static_cast<int>(views.size())};
+  }
+  // The nodes in the boxes' bands with the velocities the update gave them, before the ghosts change any.
+  void find_coupling_nodes(const V& s) {
+    node_body_.resize(s.nodes);
+    const CouplingFind<D, T> f{s, boxes(), coupling_band_ * dx_, raw(node_body_)};
+    mpm::parallel_for(s.nodes, f);
+    picked_.resize(s.nodes);
+    thr::counting_iterator<int64_t> first(0);
+    const size_t k = thr::copy_if(thr::device, first, first + s.nodes, node_body_.begin(), picked_.begin(), IsBody{}) -
+                     picked_.begin();
+    coupling_.resize(k);
+    mpm::parallel_for(k, CouplingGather<D, T>{f, raw(picked_), raw(coupling_)});
+    h_coupling_.resize(k);
+    thr::copy(coupling_.begin(), coupling_.begin() + k, h_coupling_.begin());
+  }
+  // The exchange on the host (nodes in storage order, which is the CPU's grid order), then the projected
+  // velocities back into the grid.
+  void couple_debris(const V& s, double dt) {
+    debris_->exchange(h_coupling_, dt);
+    thr::copy(h_coupling_.begin(), h_coupling_.end(), coupling_.begin());
+    mpm::parallel_for(h_coupling_.size(), CouplingScatter<D, T>{s, raw(coupling_)});
+  }
+  // Particles inside a box go back to its surface; their lost momentum goes to the box, summed as the CPU sums
+  // it (per particle block, then over the blocks in order) so that the sums do not depend on the backend.
+  void push_out_of_debris(const V& s) {
+    const Boxes b = boxes();
+    particle_body_.resize(n_);
+    mpm::parallel_for(n_, PushFind<D, T>{s, b, raw(particle_body_)});
+    picked_.resize(std::max(picked_.size(), n_));
+    thr::counting_iterator<int64_t> first(0);
+    const size_t k = thr::copy_if(thr::device, first, first + n_, particle_body_.begin(), picked_.begin(), IsBody{}) -
+                     picked_.begin();
+    const int nb = b.count;
+    std::vector<double> total(static_cast<size_t>(nb) * 6, 0.0);
+    if (k > 0) {
+      push_share_.resize(6 * k);
+      push_body_.resize(k);
+      push_block_.resize(k);
+      mpm::parallel_for(k, PushOut<D, T>{s, b, raw(picked_), raw(push_share_), raw(push_body_), raw(push_block_)});
+      std::vector<double> share(6 * k);
+      std::vector<int32_t> body(k), block(k);
+      thr::copy(push_share_.begin(), push_share_.begin() + 6 * k, share.begin());
+      thr::copy(push_body_.begin(), push_body_.begin() + k, body.begin());
+      thr::copy(push_block_.begin(), push_block_.begin() + k, block.begin());
+      std::vector<double> in_block(total.size(), 0.0);
+      for (size_t j = 0; j < k; ++j) {
+        if (j > 0 && block[j] != block[j - 1]) {
+          for (size_t q = 0; q < total.size(); ++q) total[q] += in_block[q];
+          std::fill(in_block.begin(), in_block.end(), 0.0);
+        }
+        for (int q = 0; q < 6; ++q) in_block[body[j] * 6 + q] += share[6 * j + q];
+      }
+      for (size_t q = 0; q < total.size(); ++q) total[q] += in_block[q];
+    }
+    for (int body = 0; body < nb; ++body) debris_->add_particle_impulse(body, &total[body * 6], &total[body * 6 + 3]);
   }
 
   // Per-particle work arrays, after the particle count changed.
@@ -1036,6 +1228,15 @@ class MpmCuda final : public Simulation {
   mpm::SymmetryPlane sym_;
   mpm::Container<D, T> container_;  // the domain box
   bool has_loads_ = false;
+  // debris (the boxes on the host; their views, each box's band and the particles it pushed out on the device)
+  static constexpr double coupling_band_ = 1.0;  // cells: as MpmSolver::coupling_band_
+  std::unique_ptr<DebrisCoupling> debris_;
+  thr::device_vector<RigidBoxView> box_views_;
+  thr::device_vector<double> box_radius_, push_share_;
+  thr::device_vector<int32_t> node_body_, particle_body_, push_body_, push_block_;
+  thr::device_vector<int64_t> picked_;
+  thr::device_vector<CouplingNode> coupling_;
+  std::vector<CouplingNode> h_coupling_;
   // host
   std::unique_ptr<InflowBoundary<D, T>> inflow_;
   struct {

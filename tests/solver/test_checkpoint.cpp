@@ -212,6 +212,14 @@ TEST(Checkpoint, ResumedFloatingBoxRepeatsTheUninterruptedRun) {
                                        "floating");
   expect_exact_resume(scene, 0.05);
 }
+#ifdef FLUME_CUDA_EMULATION_AVAILABLE
+TEST(Checkpoint, CudaEmulationResumedFloatingBoxRepeatsTheUninterruptedRun) {
+  const double depth = 0.15, H = 0.08;
+  const Scene scene = parse_scene_text(test::tank_scene(0.3, depth, H, 419.0, depth - 0.04 + H / 2, 0.02, 0.12),
+                                       "floating");
+  expect_exact_resume(scene, 0.05, [](const Scene& s) { return make_cuda_host_emulation(s, {}); });
+}
+#endif
 
 std::vector<double> gauge(const fs::path& run, const std::string& name) {
   return h5::read_vector((run / "result.h5").string(), "/gauges/" + name + "/elevation");

@@ -9,9 +9,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <string>
 
 #include "rotation.h"
+#include "solver/cuda/mpm_cuda.h"
 #include "solver/scene.h"
 #include "solver/simulation.h"
 #include "test_util.h"
@@ -20,6 +22,14 @@ namespace flume {
 namespace {
 
 constexpr double kRho = 1000;
+
+// The backend under test: the CPU's, and the CUDA backend's source compiled for the host (the same tests hold it
+// to the same bounds: conservation is the method's, not a backend's).
+using Factory = std::function<std::unique_ptr<Simulation>(const Scene&)>;
+std::unique_ptr<Simulation> cpu(const Scene& s) { return make_simulation(s, {}); }
+#ifdef FLUME_CUDA_EMULATION_AVAILABLE
+std::unique_ptr<Simulation> emulated(const Scene& s) { return make_cuda_host_emulation(s, {}); }
+#endif
 
 using test::free_blob;
 
@@ -52,14 +62,14 @@ double momentum_scale(const Simulation& sim) {
   return s;
 }
 
-TEST(Conservation, MassIsExactThroughADamBreak) {
-  // With gravity and walls: particles carry the mass, so it is the same number at every record, and
-  // equal to rho times the water's area.
+// With gravity and walls: particles carry the mass, so it is the same number at every record, and equal to rho
+// times the water's area.
+void expect_mass_exact_through_a_dam_break(const Factory& make) {
   const Scene scene = load_scene(std::string(FLUME_SOURCE_DIR) + "/scenes/dam_break/martin_moyce_2d.json",
                                  {{"solver.dx", "0.005715"},  // 10 cells across the column: 20 x 40 particles
                                   {"solver.end_time", "0.1"},
                                   {"instruments.snapshot_rate_hz", "0"}});
-  auto sim = make_simulation(scene, {});
+  auto sim = make(scene);
   const size_t n0 = sim->particle_count();
   const double m0 = sim->total_mass();
   EXPECT_NEAR(m0, kRho * 0.05715 * 0.1143, 1e-12 * m0);
@@ -72,6 +82,10 @@ TEST(Conservation, MassIsExactThroughADamBreak) {
   // The column did collapse (the walls and gravity were at work).
   EXPECT_GT(sim->record().diagnostics.at("max_speed").back(), 0.5);
 }
+TEST(Conservation, MassIsExactThroughADamBreak) { expect_mass_exact_through_a_dam_break(cpu); }
+#ifdef FLUME_CUDA_EMULATION_AVAILABLE
+TEST(Conservation, CudaEmulationMassIsExactThroughADamBreak) { expect_mass_exact_through_a_dam_break(emulated); }
+#endif
 
 // A water box whose sides are not whole particle spacings (dx 0.04 m, spacing 0.02 m: 6.5 x 5 x 11.5 spacings,
 // seeded as 7 x 5 x 12 particles stretched to fit) carries rho times its volume: each particle's reference
@@ -110,12 +124,12 @@ TEST(Conservation, SeededMassIsRhoTimesTheBoxVolume) {
     }
 }
 
-// Linear momentum with a translating, spinning blob: constant to round-off.
-TEST(Conservation, LinearMomentumToRoundOff) {
+// Linear momentum with a translating, spinning blob: constant to round-off, over `steps` steps.
+void expect_linear_momentum_to_round_off(const Factory& make, int steps) {
   for (int dim : {2, 3}) {
     SCOPED_TRACE(std::to_string(dim) + "D");
     const Scene scene = dim == 2 ? free_blob(2, 0.005, 0.1) : free_blob(3, 0.02, 0.1);
-    auto sim = make_simulation(scene, {});
+    auto sim = make(scene);
     const double v0[3] = {0.5, -0.3, dim == 3 ? 0.2 : 0.0}, omega[3] = {1.0, -2.0, 5.0},
                  centre[3] = {0, 0, 0};
     sim->set_rigid_velocity(v0, omega, centre);
@@ -124,19 +138,24 @@ TEST(Conservation, LinearMomentumToRoundOff) {
     const double M = sim->total_mass();
     for (int d = 0; d < dim; ++d) EXPECT_NEAR(a.linear[d], M * v0[d], 1e-12 * scale);
     double worst = 0;
-    for (int s = 0; s < 1000; ++s) {
+    for (int s = 0; s < steps; ++s) {
       ASSERT_EQ(sim->step(), RunStatus::kRunning) << sim->message();
       const Moments b = moments(*sim);
       for (int d = 0; d < 3; ++d) worst = std::max(worst, std::fabs(b.linear[d] - a.linear[d]));
     }
     EXPECT_LT(extent(*sim), 0.5);
-    std::printf("[ info ] %dD: %zu particles, 1000 steps to t = %.4f s: max |P - P0| / sum(m|v|) = %.2e\n",
-                dim, sim->particle_count(), sim->time(), worst / scale);
+    std::printf("[ info ] %dD: %zu particles, %d steps to t = %.4f s: max |P - P0| / sum(m|v|) = %.2e\n", dim,
+                sim->particle_count(), steps, sim->time(), worst / scale);
     // Each step sums ~9 n products per component; 1e-12 of the momentum scale is ~1e4 ulps, far below
     // any transfer error (a weight sum off by 1e-6 would show at 1e-6).
     EXPECT_LT(worst, 1e-12 * scale);
   }
 }
+TEST(Conservation, LinearMomentumToRoundOff) { expect_linear_momentum_to_round_off(cpu, 1000); }
+#ifdef FLUME_CUDA_EMULATION_AVAILABLE
+// 200 steps: the emulation runs on one thread (as CudaEmulation.AngularMomentumOfASpinningBlob).
+TEST(Conservation, CudaEmulationLinearMomentumToRoundOff) { expect_linear_momentum_to_round_off(emulated, 200); }
+#endif
 
 // The angular momentum the solver reports for a rigid rotation is the lattice's I omega plus the APIC spin
 // M dx^2/2 omega (rotation.h): the spin's sign and size, in 2D and 3D, about every axis.
