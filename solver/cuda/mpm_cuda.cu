@@ -20,8 +20,10 @@
 // (mass, momentum/velocity x D, mass-weighted strain), so memory follows the water as on the CPU. The re-sort
 // criterion is the CPU's: a particle's base node drifting more than one cell out of its sorted block.
 //
-// Scatter. P2G is one thread per particle adding into the grid with atomics (the GPU's, not the CPU's tiles).
-// The sum's order is therefore not fixed: results agree with the CPU, and between GPU runs, to round-off.
+// Scatter. P2G runs a thread block per particle block (mpm::tiled_for): its threads add their particles into a
+// tile in shared memory with shared atomics, and each tile node then goes to the grid with one global atomic
+// per channel (global atomics bound the one-thread-per-particle scatter: docs/benchmarks.md). The sums' order
+// is not fixed: results agree with the CPU, and between GPU runs, to round-off.
 //
 // Instruments. The CPU's InstrumentSet is reused unchanged. Its gauges and probes read particle positions
 // and velocities, which are copied to host mirrors lazily, only when one of them samples (2 D arrays of n
@@ -204,18 +206,19 @@ struct NeighbourKey {
 };
 
 // P2G, one particle: mass, momentum with the MLS-MPM stress term (Hu et al. 2018, eq. 29) and the
-// mass-weighted strain, less its hydrostatic part (mpm::hydrostatic_strain), scattered with atomics.
+// mass-weighted strain, less its hydrostatic part (mpm::hydrostatic_strain), handed to a scatter (P2GTiled).
 template <int D, typename T>
 struct P2G {
   View<D, T> s;
   T dt;
   T lift;  // the vacuum's hold on a held particle this step, per unit mass: dt f(t) |g| (upward velocity)
-  FLUME_HD void operator()(size_t i) const {
+  // Particle i's contributions to its 3^D nodes: put(node, values) with the node's global coordinates and its
+  // kChannels values (mass, momentum, mass-weighted strain, volume).
+  template <typename Put>
+  FLUME_HD void scatter(size_t i, const Put& put) const {
     const T dx = s.dx, V = s.vol[i], m = s.rho * V;
     const T stress_scale = -dt * T(4) * s.inv_dx * s.inv_dx;  // times the particle's reference volume
-    const int32_t pb = s.pblk[i];
-    int blk[D], base[D];
-    unpack_key<D>(s.pkeys[pb], blk);
+    int base[D];
     T w[D][3], f[D];
     for (int d = 0; d < D; ++d) {
       const T xg = (s.x[d][i] - s.grid_lo[d]) * s.inv_dx;
@@ -238,16 +241,59 @@ struct P2G {
       T wt = w[0][off[0]];
       for (int d = 1; d < D; ++d) wt *= w[d][off[d]];
       for (int d = 0; d < D; ++d) node[d] = base[d] + off[d];
-      const size_t idx = s.node_index(pb, blk, node);
-      mpm::accumulate(&s.grid[idx], wt * m);
+      T val[View<D, T>::kChannels];
+      val[0] = wt * m;
       for (int a = 0; a < D; ++a) {
         T mom = mom0[a];
         for (int b = 0; b < D; ++b) mom += A[a * D + b] * (T(off[b]) * dx);
-        mpm::accumulate(&s.grid[(1 + a) * s.nodes + idx], wt * mom);
+        val[1 + a] = wt * mom;
       }
-      mpm::accumulate(&s.grid[(1 + D) * s.nodes + idx], wt * mJ);
-      mpm::accumulate(&s.grid[(2 + D) * s.nodes + idx], wt * vol);
+      val[1 + D] = wt * mJ;
+      val[2 + D] = wt * vol;
+      put(node, val);
     }
+  }
+};
+
+// P2G per particle block through a tile (mpm::tiled_for): the block's particles add into a tile of the nodes
+// their stencils reach, then each tile node goes to the grid once. A particle's stencil base lies within one
+// node of its block (re-sorted otherwise: AuditParticle), so the tile spans kBlock + 4 nodes per axis from one
+// node below the block.
+template <int D, typename T>
+struct P2GTiled {
+  static constexpr int kSpan = kBlock + 4;
+  static constexpr int kEntries = mpm::Pow<D>::of(kSpan);
+  P2G<D, T> p2g;
+  const int32_t* pstart;  // first particle of each particle block, and the count at the end
+  FLUME_HD int tile_entries() const { return kEntries; }
+  FLUME_HD int tile_values() const { return kEntries * View<D, T>::kChannels; }
+  FLUME_HD void items(size_t g, size_t& first, size_t& last) const {
+    first = static_cast<size_t>(pstart[g]);
+    last = static_cast<size_t>(pstart[g + 1]);
+  }
+  FLUME_HD void item(size_t g, size_t i, T* tile) const {
+    int lo[D];
+    origin(g, lo);
+    p2g.scatter(i, [&](const int* node, const T* val) {
+      int v = 0;
+      for (int d = 0; d < D; ++d) v = v * kSpan + node[d] - lo[d];
+      for (int c = 0; c < View<D, T>::kChannels; ++c) mpm::accumulate(&tile[c * kEntries + v], val[c]);
+    });
+  }
+  FLUME_HD void flush(size_t g, int v, const T* tile) const {
+    if (!(tile[v] != T(0))) return;  // no particle's stencil reached it (every value is then zero)
+    const View<D, T>& s = p2g.s;
+    int blk[D], lo[D], node[D];
+    unpack_key<D>(s.pkeys[g], blk);
+    origin(g, lo);
+    for (int d = D - 1, r = v; d >= 0; --d, r /= kSpan) node[d] = lo[d] + r % kSpan;
+    const size_t idx = s.node_index(static_cast<int32_t>(g), blk, node);
+    for (int c = 0; c < View<D, T>::kChannels; ++c) mpm::accumulate(&s.grid[c * s.nodes + idx], tile[c * kEntries + v]);
+  }
+  FLUME_HD void origin(size_t g, int* lo) const {
+    int blk[D];
+    unpack_key<D>(p2g.s.pkeys[g], blk);
+    for (int d = 0; d < D; ++d) lo[d] = blk[d] * kBlock - 1;
   }
 };
 
@@ -671,7 +717,7 @@ class MpmCuda final : public Simulation {
     if (has_loads_) thr::fill(thr::device, impulse_.begin(), impulse_.end(), 0.0);
     // The vacuum's hold: an upward force f(t) m |g| on the held water (as MpmSolver::p2g).
     const T lift = T(double(dt) * scene_.basin.forcing.hold(time_) * std::fabs(scene_.solver.gravity[D - 1]));
-    mpm::parallel_for(n_, P2G<D, T>{s, T(dt), lift});
+    mpm::tiled_for<T>(pkeys_.size(), P2GTiled<D, T>{{s, T(dt), lift}, raw(pstart_)});
     if (s.has_sym) mpm::parallel_for(s.nodes, SymmetryFold<D, T>{s});
     mpm::parallel_for(s.nodes, GridUpdate<D, T>{s, T(dt)});
     if (debris_) find_coupling_nodes(s);
@@ -989,6 +1035,10 @@ class MpmCuda final : public Simulation {
     pkeys_.resize(n_);
     pkeys_.resize(thr::unique_copy(thr::device, keys_.begin(), keys_.end(), pkeys_.begin()) - pkeys_.begin());
     thr::lower_bound(thr::device, pkeys_.begin(), pkeys_.end(), keys_.begin(), keys_.end(), pblk_.begin());
+    // Each particle block's first particle (pblk_ is sorted), and the count at the end: P2GTiled's ranges.
+    pstart_.resize(pkeys_.size() + 1);
+    thr::counting_iterator<int32_t> block0(0);
+    thr::lower_bound(thr::device, pblk_.begin(), pblk_.end(), block0, block0 + pstart_.size(), pstart_.begin());
     // Grid blocks: the 3^D neighbourhood of every particle block; each particle block's neighbour table.
     const size_t nn = pkeys_.size() * kNbr;
     nbr_keys_.resize(nn);
@@ -1212,7 +1262,7 @@ class MpmCuda final : public Simulation {
   size_t n_ = 0;
   // device: particles (e: volumetric strain J - 1), sort scratch, blocks, grid, walls
   thr::device_vector<T> x_[D], v_[D], C_[D * D], e_, vol_, held_, tag_, tmp_;  // tag_: solver/inflow.h
-  thr::device_vector<int32_t> pblk_, p_nbr_;
+  thr::device_vector<int32_t> pblk_, pstart_, p_nbr_;
   thr::device_vector<uint32_t> order_;
   thr::device_vector<uint64_t> keys_, pkeys_, gkeys_, nbr_keys_;
   thr::device_vector<T> grid_;

@@ -7,7 +7,11 @@
 // Each build of it lives in its own inline namespace, so that the CPU's and the emulated CUDA backend's,
 // linked into one program, are different functions rather than one function defined twice.
 #pragma once
+#include <algorithm>
 #include <cstddef>
+#include <stdexcept>
+#include <string>
+#include <vector>
 
 #if defined(__CUDACC__) || defined(FLUME_CUDA_EMULATION)
 #include <thrust/execution_policy.h>
@@ -24,6 +28,48 @@ void parallel_for(size_t n, const F& f) {
   THRUST_NS_QUALIFIER::counting_iterator<size_t> first(0);
   THRUST_NS_QUALIFIER::for_each(THRUST_NS_QUALIFIER::device, first, first + n, f);
 }
+
+// A scatter through a scratch tile per group (a particle block): f.items(g, first, last) gives group g's items,
+// f.item(g, i, tile) adds item i into the group's tile (with mpm::accumulate, which is atomic on a device),
+// f.flush(g, v, tile) moves tile entry v (of f.tile_entries()) to where it belongs. The tile holds
+// f.tile_values() values of type T. On a GPU a group is a thread block, its tile in shared memory and its threads
+// striding over the items: the many adds into one node land in shared memory, and each node reaches global
+// memory once per group. Elsewhere each group runs serially.
+#if defined(__CUDACC__) && !defined(FLUME_CUDA_EMULATION)
+template <typename T, typename F>
+__global__ void tiled_kernel(F f) {
+  extern __shared__ unsigned char tile_bytes[];
+  T* tile = reinterpret_cast<T*>(tile_bytes);
+  const size_t g = blockIdx.x;
+  for (int v = threadIdx.x; v < f.tile_values(); v += blockDim.x) tile[v] = T(0);
+  __syncthreads();
+  size_t first, last;
+  f.items(g, first, last);
+  for (size_t i = first + threadIdx.x; i < last; i += blockDim.x) f.item(g, i, tile);
+  __syncthreads();
+  for (int v = threadIdx.x; v < f.tile_entries(); v += blockDim.x) f.flush(g, v, tile);
+}
+template <typename T, typename F>
+void tiled_for(size_t groups, const F& f) {
+  if (groups == 0) return;
+  constexpr int kThreads = 128;
+  tiled_kernel<T, F><<<static_cast<unsigned>(groups), kThreads, f.tile_values() * sizeof(T)>>>(f);
+  const cudaError_t e = cudaPeekAtLastError();
+  if (e != cudaSuccess) throw std::runtime_error(std::string("CUDA tiled launch: ") + cudaGetErrorString(e));
+}
+#else
+template <typename T, typename F>
+void tiled_for(size_t groups, const F& f) {
+  std::vector<T> tile(f.tile_values());
+  for (size_t g = 0; g < groups; ++g) {
+    std::fill(tile.begin(), tile.end(), T(0));
+    size_t first, last;
+    f.items(g, first, last);
+    for (size_t i = first; i < last; ++i) f.item(g, i, tile.data());
+    for (int v = 0; v < f.tile_entries(); ++v) f.flush(g, v, tile.data());
+  }
+}
+#endif
 }  // namespace launch_thrust
 #else
 inline namespace launch_openmp {
