@@ -20,10 +20,12 @@
 // (mass, momentum/velocity x D, mass-weighted strain), so memory follows the water as on the CPU. The re-sort
 // criterion is the CPU's: a particle's base node drifting more than one cell out of its sorted block.
 //
-// Scatter. P2G runs a thread block per particle block (mpm::tiled_for): its threads add their particles into a
-// tile in shared memory with shared atomics, and each tile node then goes to the grid with one global atomic
-// per channel (global atomics bound the one-thread-per-particle scatter: docs/benchmarks.md). The sums' order
-// is not fixed: results agree with the CPU, and between GPU runs, to round-off.
+// Scatter and gather. P2G and G2P run a thread block per particle block (mpm::tiled_for) on a tile, in shared
+// memory, of the nodes the block's stencils reach: P2G's threads add their particles into it with shared
+// atomics and each tile node then goes to the grid with one global atomic per channel; G2P reads the tile from
+// the grid once and its particles gather from it (global atomics and gathers bound the one-thread-per-particle
+// stages: docs/benchmarks.md). The scatter's order is not fixed: results agree with the CPU, and between GPU
+// runs, to round-off.
 //
 // Instruments. The CPU's InstrumentSet is reused unchanged. Its gauges and probes read particle positions
 // and velocities, which are copied to host mirrors lazily, only when one of them samples (2 D arrays of n
@@ -270,6 +272,9 @@ struct P2GTiled {
   FLUME_HD void items(size_t g, size_t& first, size_t& last) const {
     first = static_cast<size_t>(pstart[g]);
     last = static_cast<size_t>(pstart[g + 1]);
+  }
+  FLUME_HD void load(size_t, int v, T* tile) const {
+    for (int c = 0; c < View<D, T>::kChannels; ++c) tile[c * kEntries + v] = T(0);
   }
   FLUME_HD void item(size_t g, size_t i, T* tile) const {
     int lo[D];
@@ -541,12 +546,13 @@ template <int D, typename T>
 struct G2P {
   View<D, T> s;
   mpm::G2pConstants<D, T> g2p;
-  FLUME_HD void operator()(size_t i) const {
+  // Particle i from its nodes' values: read(node, r) sets r to the node's velocity (D), mass-weighted strain,
+  // fill and wall flag, as GridUpdate left them.
+  template <typename Read>
+  FLUME_HD void update(size_t i, const Read& read) const {
     const T dx = s.dx;
     const T cscale = T(4) * s.inv_dx * s.inv_dx;
-    const int32_t pb = s.pblk[i];
-    int blk[D], base[D];
-    unpack_key<D>(s.pkeys[pb], blk);
+    int base[D];
     T w[D][3], f[D];
     for (int d = 0; d < D; ++d) {
       const T xg = (s.x[d][i] - s.grid_lo[d]) * s.inv_dx;
@@ -565,17 +571,18 @@ struct G2P {
         node[d] = base[d] + off[d];
         dist[d] = (T(off[d]) - f[d]) * dx;
       }
-      const size_t idx = s.node_index(pb, blk, node);
+      T r[D + 3];
+      read(node, r);
       T u[D];
       for (int a = 0; a < D; ++a) {
-        u[a] = wt * s.grid[(1 + a) * s.nodes + idx];
+        u[a] = wt * r[a];
         vn[a] += u[a];
       }
       for (int a = 0; a < D; ++a)
         for (int b = 0; b < D; ++b) Cn[a * D + b] += u[a] * dist[b];
-      const T wj = s.gwall[idx] ? T(0) : wt;
-      Jg += wj * s.grid[(1 + D) * s.nodes + idx];
-      Fg += wj * s.grid[(2 + D) * s.nodes + idx];
+      const T wj = r[D + 2] != T(0) ? T(0) : wt;
+      Jg += wj * r[D];
+      Fg += wj * r[D + 1];
       wsum += wj;
     }
     for (int k = 0; k < D * D; ++k) Cn[k] *= cscale;
@@ -589,6 +596,45 @@ struct G2P {
     }
     for (int k = 0; k < D * D; ++k) s.C[k][i] = Cn[k];
   }
+};
+
+// G2P per particle block through a tile (mpm::tiled_for): the tile of nodes the block's stencils reach is read
+// from the grid once, then each particle gathers from it (P2GTiled's tile, the other way).
+template <int D, typename T>
+struct G2PTiled {
+  static constexpr int kSpan = kBlock + 4;
+  static constexpr int kEntries = mpm::Pow<D>::of(kSpan);
+  static constexpr int kValues = D + 3;  // velocity, strain, fill, wall flag
+  G2P<D, T> g2p;
+  const int32_t* pstart;
+  FLUME_HD int tile_entries() const { return kEntries; }
+  FLUME_HD int tile_values() const { return kEntries * kValues; }
+  FLUME_HD void items(size_t g, size_t& first, size_t& last) const {
+    first = static_cast<size_t>(pstart[g]);
+    last = static_cast<size_t>(pstart[g + 1]);
+  }
+  FLUME_HD void load(size_t g, int v, T* tile) const {
+    const View<D, T>& s = g2p.s;
+    int blk[D], node[D];
+    unpack_key<D>(s.pkeys[g], blk);
+    for (int d = D - 1, r = v; d >= 0; --d, r /= kSpan) node[d] = blk[d] * kBlock - 1 + r % kSpan;
+    const size_t idx = s.node_index(static_cast<int32_t>(g), blk, node);
+    for (int a = 0; a < D; ++a) tile[a * kEntries + v] = s.grid[(1 + a) * s.nodes + idx];
+    tile[D * kEntries + v] = s.grid[(1 + D) * s.nodes + idx];
+    tile[(D + 1) * kEntries + v] = s.grid[(2 + D) * s.nodes + idx];
+    tile[(D + 2) * kEntries + v] = s.gwall[idx] ? T(1) : T(0);
+  }
+  FLUME_HD void item(size_t g, size_t i, T* tile) const {
+    int lo[D];
+    unpack_key<D>(g2p.s.pkeys[g], lo);
+    for (int d = 0; d < D; ++d) lo[d] = lo[d] * kBlock - 1;
+    g2p.update(i, [&](const int* node, T* r) {
+      int v = 0;
+      for (int d = 0; d < D; ++d) v = v * kSpan + node[d] - lo[d];
+      for (int k = 0; k < kValues; ++k) r[k] = tile[k * kEntries + v];
+    });
+  }
+  FLUME_HD void flush(size_t, int, const T*) const {}
 };
 
 // What the step's audit needs from all particles: energies, the largest speed, the first bad particle and
@@ -726,7 +772,7 @@ class MpmCuda final : public Simulation {
     if (s.has_sym) mpm::parallel_for(s.nodes, SymmetryMirror<D, T>{s});
     if (has_loads_) thr::copy(impulse_.begin(), impulse_.end(), load_impulse_.begin());
     if (debris_) couple_debris(s, double(dt));
-    mpm::parallel_for(n_, G2P<D, T>{s, g2p_constants(s, T(dt))});
+    mpm::tiled_for<T>(pkeys_.size(), G2PTiled<D, T>{{s, g2p_constants(s, T(dt))}, raw(pstart_)});
     if (debris_) push_out_of_debris(s);
     host_fresh_ = false;
     audit(T(dt));

@@ -29,19 +29,20 @@ void parallel_for(size_t n, const F& f) {
   THRUST_NS_QUALIFIER::for_each(THRUST_NS_QUALIFIER::device, first, first + n, f);
 }
 
-// A scatter through a scratch tile per group (a particle block): f.items(g, first, last) gives group g's items,
-// f.item(g, i, tile) adds item i into the group's tile (with mpm::accumulate, which is atomic on a device),
-// f.flush(g, v, tile) moves tile entry v (of f.tile_entries()) to where it belongs. The tile holds
-// f.tile_values() values of type T. On a GPU a group is a thread block, its tile in shared memory and its threads
-// striding over the items: the many adds into one node land in shared memory, and each node reaches global
-// memory once per group. Elsewhere each group runs serially.
+// Work on a tile of grid nodes per group (a particle block): f.load(g, v, tile) sets tile entry v (of
+// f.tile_entries()), f.items(g, first, last) gives group g's items, f.item(g, i, tile) works item i against the
+// tile (adding with mpm::accumulate, which is atomic on a device, or reading), f.flush(g, v, tile) moves entry v
+// to where it belongs. The tile holds f.tile_values() values of type T. On a GPU a group is a thread block, its
+// tile in shared memory and its threads striding over the items: a scatter's many adds into one node, or a
+// gather's many reads of it, stay in shared memory, and each node crosses global memory once per group.
+// Elsewhere each group runs serially.
 #if defined(__CUDACC__) && !defined(FLUME_CUDA_EMULATION)
 template <typename T, typename F>
 __global__ void tiled_kernel(F f) {
   extern __shared__ unsigned char tile_bytes[];
   T* tile = reinterpret_cast<T*>(tile_bytes);
   const size_t g = blockIdx.x;
-  for (int v = threadIdx.x; v < f.tile_values(); v += blockDim.x) tile[v] = T(0);
+  for (int v = threadIdx.x; v < f.tile_entries(); v += blockDim.x) f.load(g, v, tile);
   __syncthreads();
   size_t first, last;
   f.items(g, first, last);
@@ -62,7 +63,7 @@ template <typename T, typename F>
 void tiled_for(size_t groups, const F& f) {
   std::vector<T> tile(f.tile_values());
   for (size_t g = 0; g < groups; ++g) {
-    std::fill(tile.begin(), tile.end(), T(0));
+    for (int v = 0; v < f.tile_entries(); ++v) f.load(g, v, tile.data());
     size_t first, last;
     f.items(g, first, last);
     for (size_t i = first; i < last; ++i) f.item(g, i, tile.data());
