@@ -42,6 +42,63 @@ if [[ $mode == bundle ]]; then
   exit 0
 fi
 
+# Whole runs through `flume run --backend cuda` (the command line users call, debris included): flume and its
+# libraries are 170 MB, over what the device tool carries, so they travel as one xz archive (about 45 MB):
+#   here:   bench/run_gpu_bench.sh flume-bundle [BUILD_DIR]          # writes .gpu-flume/flume.tar.xz
+#   device: run(command="bench/run_gpu_bench.sh flume-runs", carry=[".gpu-flume"])
+# The runs: the three-container strip at its shipped dx on the GPU and on the device's CPU cores, in double (the
+# backends must agree until the containers' contacts amplify round-off) and in float, at half that dx on the
+# GPU, and the whole basin (5x2 columns) at its shipped dx. Each prints its wall time and debris metrics; run.json files go to $OUT when set.
+if [[ $mode == flume-bundle ]]; then
+  build=${2:-$root/build}
+  stage=$(mktemp -d)
+  mkdir -p "$stage/bin" "$stage/lib" .gpu-flume
+  exclude=$(git rev-parse --git-path info/exclude)
+  grep -qx '/.gpu-flume/' "$exclude" 2>/dev/null || echo '/.gpu-flume/' >>"$exclude"
+  cp "$build/bin/flume" "$stage/bin/"
+  strip "$stage/bin/flume"
+  ldd "$stage/bin/flume" | awk '/=> \// {print $3}' |
+    grep -vE '/(libc|libm|libdl|libpthread|librt|libresolv|ld-linux[^/]*|libcuda)\.so' |
+    while read -r lib; do cp -L "$lib" "$stage/lib/"; done
+  tar -C "$stage" -cf - . | xz -T2 -6 >.gpu-flume/flume.tar.xz
+  rm -rf "$stage"
+  du -sh .gpu-flume
+  exit 0
+fi
+if [[ $mode == flume-runs ]]; then
+  fl=$(mktemp -d)
+  tar -C "$fl" -xJf .gpu-flume/flume.tar.xz
+  export LD_LIBRARY_PATH=$fl/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}
+  out=${OUT:-$(mktemp -d)}
+  nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv,noheader || true
+  echo "# $(date -u +%Y-%m-%dT%H:%MZ), $(nproc) cores, $(git describe --always --dirty 2>/dev/null || echo unknown)"
+  one() {  # one NAME TIMEOUT flume-run-arguments...
+    local name=$1 limit=$2
+    shift 2
+    local t0=$SECONDS
+    timeout "$limit" "$fl/bin/flume" run "$@" --out "$fl/$name" -q >"$fl/$name.log" 2>&1
+    local rc=$?
+    cp "$fl/$name/run.json" "$out/$name.run.json" 2>/dev/null || true
+    python3 - "$fl/$name/run.json" "$name" "$rc" "$((SECONDS - t0))" <<'PY' || echo "$name: rc $rc, no run.json"
+import json, sys
+path, name, rc, wall = sys.argv[1:5]
+d = json.load(open(path))
+m, c = d["metrics"], d["cost"]
+keys = sorted(k for k in m if k.endswith((".longitudinal_max_m", ".lateral_rest_m")) or k in ("WG1.peak_m", "WG2.peak_m", "WG3.peak_m"))
+print(f"{name}: rc {rc}, status {d['status']}, {wall} s wall, {c['steps']} steps, {c['particles']} particles, "
+      f"{c['particle_steps_per_s']:.3g} particle-steps/s; " + ", ".join(f"{k} {m[k]:.4f}" for k in keys))
+PY
+  }
+  strip=scenes/waseda/waseda_strip.json
+  one strip_dx050_double_cuda 30 "$strip" --backend cuda --set solver.precision=double
+  one strip_dx050_double_cpu 45 "$strip" --backend cpu --set solver.precision=double
+  one strip_dx050_cuda 30 "$strip" --backend cuda
+  one strip_dx050_cpu 45 "$strip" --backend cpu
+  one strip_dx025_cuda 60 "$strip" --backend cuda --set solver.dx=0.025
+  one basin_dx040_cuda 70 scenes/waseda/waseda_3d.json --backend cuda
+  exit 0
+fi
+
 if [[ -d .gpu/lib ]]; then
   export LD_LIBRARY_PATH=$root/.gpu/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}
 fi
