@@ -46,6 +46,7 @@
 // bodies both backends run are in solver/mpm/debris_k.h; this class is the host side.
 #pragma once
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -109,5 +110,17 @@ class DebrisCoupling {
   std::vector<Eigen::Matrix<double, 6, 1>> pending_;  // particle impulses for the next exchange (force, torque)
   Eigen::Vector3d gravity_;
 };
+
+// The seeding's test for the water a box displaces (solver/seeding.h): a point (D coordinates) inside a box is
+// not seeded. Empty without debris.
+template <int D>
+std::function<bool(const double*)> displaced_by(const DebrisCoupling* debris) {
+  if (!debris) return {};
+  return [debris](const double* p) {
+    double x3[3] = {0, 0, 0}, n[3];
+    for (int d = 0; d < D; ++d) x3[d] = p[d];
+    return debris->locate(x3, 0.0, n) >= 0;
+  };
+}
 
 }  // namespace flume

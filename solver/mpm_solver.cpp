@@ -304,14 +304,7 @@ class MpmSolver final : public Simulation {
     spacing_ = dx_ / per_axis;
     rho_ = scene_.fluid.density;
     // Water is not seeded inside a debris box: the box displaces it.
-    std::function<bool(const double*)> displaced;
-    if (debris_)
-      displaced = [this](const double* p) {
-        double x3[3] = {0, 0, 0}, nn[3];
-        for (int d = 0; d < D; ++d) x3[d] = p[d];
-        return debris_->locate(x3, 0.0, nn) >= 0;
-      };
-    const Seeds seeds = seed_water<D>(scene_, spacing_, displaced);
+    const Seeds seeds = seed_water<D>(scene_, spacing_, displaced_by<D>(debris_.get()));
     n_ = seeds.size();
     for (int d = 0; d < D; ++d) {
       x_[d].assign(seeds.x[d].begin(), seeds.x[d].end());
