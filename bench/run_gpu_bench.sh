@@ -47,8 +47,9 @@ fi
 #   here:   bench/run_gpu_bench.sh flume-bundle [BUILD_DIR]          # writes .gpu-flume/flume.tar.xz
 #   device: run(command="bench/run_gpu_bench.sh flume-runs", carry=[".gpu-flume"])
 # The runs: the three-container strip at its shipped dx on the GPU and on the device's CPU cores, in double (the
-# backends must agree until the containers' contacts amplify round-off) and in float, at half that dx on the
-# GPU, and the whole basin (5x2 columns) at its shipped dx. Each prints its wall time and debris metrics; run.json files go to $OUT when set.
+# backends must agree until the containers' contacts amplify round-off) and in float (twice on the GPU: its
+# atomics' order changes from run to run, so two GPU runs show the spread round-off alone gives), at half that
+# dx on the GPU, and the whole basin (5x2 columns) at its shipped dx. Each prints its wall time and debris metrics; run.json files go to $OUT when set.
 if [[ $mode == flume-bundle ]]; then
   build=${2:-$root/build}
   stage=$(mktemp -d)
@@ -93,6 +94,7 @@ PY
   one strip_dx050_double_cuda 30 "$strip" --backend cuda --set solver.precision=double
   one strip_dx050_double_cpu 45 "$strip" --backend cpu --set solver.precision=double
   one strip_dx050_cuda 30 "$strip" --backend cuda
+  one strip_dx050_cuda_again 30 "$strip" --backend cuda  # atomics' order: how far two GPU runs differ
   one strip_dx050_cpu 45 "$strip" --backend cpu
   one strip_dx025_cuda 60 "$strip" --backend cuda --set solver.dx=0.025
   one basin_dx040_cuda 70 scenes/waseda/waseda_3d.json --backend cuda
