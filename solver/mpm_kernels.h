@@ -43,6 +43,19 @@ FLUME_HD int stencil_base(T x_grid, T& f) {
   return base;
 }
 
+// A grid node's coordinate, lo + i dx, rounded as a product and then a sum on every backend and build. The
+// boxes' geometry (wall_faces, ghost_box) compares it exactly with faces that often lie on grid lines; a fused
+// multiply-add, nvcc's default, moved nodes across such ties and held or mirrored them unlike the CPU
+// (docs/benchmarks.md).
+FLUME_HD double node_coordinate(double lo, int i, double dx) {
+#if defined(__CUDA_ARCH__)
+  return __dadd_rn(lo, __dmul_rn(double(i), dx));
+#else
+  const volatile double product = double(i) * dx;  // volatile: no contraction with the sum (-march=native GCC)
+  return lo + product;
+#endif
+}
+
 // Volumes are carried as the volumetric strain e = J - 1, not as J: water under a 0.2 m head has
 // e ~ -1e-4 at K = 2e7 Pa, which 1 + e stored in float would resolve to only three digits, and a step's
 // change (~1e-8) would be lost entirely. Every function below takes e and stays accurate as e -> 0.

@@ -646,7 +646,7 @@ class MpmSolver final : public Simulation {
     Ghost ghost;
     for (int d = 0; d < D; ++d) ghost.vpre[d] = acc[1 + d] / m;
     double xn[D];
-    for (int d = 0; d < D; ++d) xn[d] = grid_lo_[d] + node[d] * dx_;
+    for (int d = 0; d < D; ++d) xn[d] = mpm::node_coordinate(grid_lo_[d], node[d], dx_);
     mpm::GhostSearch<D> found;
     uint8_t on_wall = mpm::apply_boundaries<D>(
         xn, m, v, dt, load_weight, dx_, subcell_rate0_, walls_.data(), g_bnd_.data() + g_bnd_start_[g],

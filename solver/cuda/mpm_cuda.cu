@@ -370,7 +370,7 @@ struct GridUpdate {
     T v[D];
     for (int d = 0; d < D; ++d) v[d] = s.grid[(1 + d) * s.nodes + idx] / m + dt * s.gravity[d];
     double xn[D];
-    for (int d = 0; d < D; ++d) xn[d] = s.grid_lo_d[d] + node[d] * s.dx_d;
+    for (int d = 0; d < D; ++d) xn[d] = mpm::node_coordinate(s.grid_lo_d[d], node[d], s.dx_d);
     // The particles' momentum alone, before gravity and the walls: what a ghost's image reflects (mpm::ghost_exchange).
     for (int d = 0; d < D; ++d) s.ghost_dv[d * s.nodes + idx] = s.grid[(1 + d) * s.nodes + idx] / m;
     mpm::GhostSearch<D> found;
@@ -470,7 +470,7 @@ struct CouplingFind {
   }
   FLUME_HD bool fill(size_t idx, const int* node, CouplingNode& c) const {
     double xn[D];
-    for (int d = 0; d < D; ++d) xn[d] = s.grid_lo_d[d] + node[d] * s.dx_d;
+    for (int d = 0; d < D; ++d) xn[d] = mpm::node_coordinate(s.grid_lo_d[d], node[d], s.dx_d);
     T v[D];
     for (int d = 0; d < D; ++d) v[d] = s.grid[(1 + d) * s.nodes + idx];
     return mpm::coupling_node<D, T>(boxes.views, boxes.radius, boxes.count, xn, band, idx, s.grid[idx],
