@@ -256,48 +256,61 @@ struct P2G {
   }
 };
 
-// P2G per particle block through a tile (mpm::tiled_for): the block's particles add into a tile of the nodes
-// their stencils reach, then each tile node goes to the grid once. A particle's stencil base lies within one
-// node of its block (re-sorted otherwise: AuditParticle), so the tile spans kBlock + 4 nodes per axis from one
-// node below the block.
-template <int D, typename T>
-struct P2GTiled {
+// The tile of a particle block for mpm::tiled_for: the nodes its particles' stencils reach. A particle's stencil
+// base lies within one node of its block (re-sorted otherwise: AuditParticle), so the tile spans kBlock + 4
+// nodes per axis from one node below the block. Entry v of the tile is its node's offset from that corner.
+template <int D>
+struct BlockTile {
   static constexpr int kSpan = kBlock + 4;
   static constexpr int kEntries = mpm::Pow<D>::of(kSpan);
-  P2G<D, T> p2g;
+  const uint64_t* pkeys;
   const int32_t* pstart;  // first particle of each particle block, and the count at the end
   FLUME_HD int tile_entries() const { return kEntries; }
-  FLUME_HD int tile_values() const { return kEntries * View<D, T>::kChannels; }
   FLUME_HD void items(size_t g, size_t& first, size_t& last) const {
     first = static_cast<size_t>(pstart[g]);
     last = static_cast<size_t>(pstart[g + 1]);
   }
+  // Block g's coordinates and its tile's lowest node.
+  FLUME_HD void corner(size_t g, int* blk, int* lo) const {
+    unpack_key<D>(pkeys[g], blk);
+    for (int d = 0; d < D; ++d) lo[d] = blk[d] * kBlock - 1;
+  }
+  FLUME_HD static int entry(const int* node, const int* lo) {
+    int v = 0;
+    for (int d = 0; d < D; ++d) v = v * kSpan + node[d] - lo[d];
+    return v;
+  }
+  FLUME_HD static void entry_node(int v, const int* lo, int* node) {
+    for (int d = D - 1; d >= 0; --d, v /= kSpan) node[d] = lo[d] + v % kSpan;
+  }
+};
+
+// P2G through the block's tile: its particles add into the tile, then each tile node goes to the grid once.
+template <int D, typename T>
+struct P2GTiled : BlockTile<D> {
+  using Tile = BlockTile<D>;
+  static constexpr int kChannels = View<D, T>::kChannels;
+  P2G<D, T> p2g;
+  FLUME_HD int tile_values() const { return Tile::kEntries * kChannels; }
   FLUME_HD void load(size_t, int v, T* tile) const {
-    for (int c = 0; c < View<D, T>::kChannels; ++c) tile[c * kEntries + v] = T(0);
+    for (int c = 0; c < kChannels; ++c) tile[c * Tile::kEntries + v] = T(0);
   }
   FLUME_HD void item(size_t g, size_t i, T* tile) const {
-    int lo[D];
-    origin(g, lo);
+    int blk[D], lo[D];
+    this->corner(g, blk, lo);
     p2g.scatter(i, [&](const int* node, const T* val) {
-      int v = 0;
-      for (int d = 0; d < D; ++d) v = v * kSpan + node[d] - lo[d];
-      for (int c = 0; c < View<D, T>::kChannels; ++c) mpm::accumulate(&tile[c * kEntries + v], val[c]);
+      const int v = Tile::entry(node, lo);
+      for (int c = 0; c < kChannels; ++c) mpm::accumulate(&tile[c * Tile::kEntries + v], val[c]);
     });
   }
   FLUME_HD void flush(size_t g, int v, const T* tile) const {
     if (!(tile[v] != T(0))) return;  // no particle's stencil reached it (every value is then zero)
     const View<D, T>& s = p2g.s;
     int blk[D], lo[D], node[D];
-    unpack_key<D>(s.pkeys[g], blk);
-    origin(g, lo);
-    for (int d = D - 1, r = v; d >= 0; --d, r /= kSpan) node[d] = lo[d] + r % kSpan;
+    this->corner(g, blk, lo);
+    Tile::entry_node(v, lo, node);
     const size_t idx = s.node_index(static_cast<int32_t>(g), blk, node);
-    for (int c = 0; c < View<D, T>::kChannels; ++c) mpm::accumulate(&s.grid[c * s.nodes + idx], tile[c * kEntries + v]);
-  }
-  FLUME_HD void origin(size_t g, int* lo) const {
-    int blk[D];
-    unpack_key<D>(p2g.s.pkeys[g], blk);
-    for (int d = 0; d < D; ++d) lo[d] = blk[d] * kBlock - 1;
+    for (int c = 0; c < kChannels; ++c) mpm::accumulate(&s.grid[c * s.nodes + idx], tile[c * Tile::kEntries + v]);
   }
 };
 
@@ -518,7 +531,7 @@ struct PushOut {
   const int64_t* index;
   double* share;  // 6 per entry: impulse, then its moment about the origin
   int32_t* body;  // per entry
-  int32_t* block; // per entry: the particle's block, for the CPU's per-block partial sums
+  int32_t* block;  // per entry: the particle's block, for the CPU's per-block partial sums
   FLUME_HD void operator()(size_t k) const {
     const size_t i = static_cast<size_t>(index[k]);
     double x[3] = {0, 0, 0}, v[3] = {0, 0, 0};
@@ -597,40 +610,31 @@ struct G2P {
   }
 };
 
-// G2P per particle block through a tile (mpm::tiled_for): the tile of nodes the block's stencils reach is read
-// from the grid once, then each particle gathers from it (P2GTiled's tile, the other way).
+// G2P through the block's tile (BlockTile): the tile is read from the grid once, then each particle gathers from
+// it.
 template <int D, typename T>
-struct G2PTiled {
-  static constexpr int kSpan = kBlock + 4;
-  static constexpr int kEntries = mpm::Pow<D>::of(kSpan);
+struct G2PTiled : BlockTile<D> {
+  using Tile = BlockTile<D>;
   static constexpr int kValues = D + 3;  // velocity, strain, fill, wall flag
   G2P<D, T> g2p;
-  const int32_t* pstart;
-  FLUME_HD int tile_entries() const { return kEntries; }
-  FLUME_HD int tile_values() const { return kEntries * kValues; }
-  FLUME_HD void items(size_t g, size_t& first, size_t& last) const {
-    first = static_cast<size_t>(pstart[g]);
-    last = static_cast<size_t>(pstart[g + 1]);
-  }
+  FLUME_HD int tile_values() const { return Tile::kEntries * kValues; }
   FLUME_HD void load(size_t g, int v, T* tile) const {
     const View<D, T>& s = g2p.s;
-    int blk[D], node[D];
-    unpack_key<D>(s.pkeys[g], blk);
-    for (int d = D - 1, r = v; d >= 0; --d, r /= kSpan) node[d] = blk[d] * kBlock - 1 + r % kSpan;
+    int blk[D], lo[D], node[D];
+    this->corner(g, blk, lo);
+    Tile::entry_node(v, lo, node);
     const size_t idx = s.node_index(static_cast<int32_t>(g), blk, node);
-    for (int a = 0; a < D; ++a) tile[a * kEntries + v] = s.grid[(1 + a) * s.nodes + idx];
-    tile[D * kEntries + v] = s.grid[(1 + D) * s.nodes + idx];
-    tile[(D + 1) * kEntries + v] = s.grid[(2 + D) * s.nodes + idx];
-    tile[(D + 2) * kEntries + v] = s.gwall[idx] ? T(1) : T(0);
+    for (int a = 0; a < D; ++a) tile[a * Tile::kEntries + v] = s.grid[(1 + a) * s.nodes + idx];
+    tile[D * Tile::kEntries + v] = s.grid[(1 + D) * s.nodes + idx];
+    tile[(D + 1) * Tile::kEntries + v] = s.grid[(2 + D) * s.nodes + idx];
+    tile[(D + 2) * Tile::kEntries + v] = s.gwall[idx] ? T(1) : T(0);
   }
   FLUME_HD void item(size_t g, size_t i, T* tile) const {
-    int lo[D];
-    unpack_key<D>(g2p.s.pkeys[g], lo);
-    for (int d = 0; d < D; ++d) lo[d] = lo[d] * kBlock - 1;
+    int blk[D], lo[D];
+    this->corner(g, blk, lo);
     g2p.update(i, [&](const int* node, T* r) {
-      int v = 0;
-      for (int d = 0; d < D; ++d) v = v * kSpan + node[d] - lo[d];
-      for (int k = 0; k < kValues; ++k) r[k] = tile[k * kEntries + v];
+      const int v = Tile::entry(node, lo);
+      for (int k = 0; k < kValues; ++k) r[k] = tile[k * Tile::kEntries + v];
     });
   }
   FLUME_HD void flush(size_t, int, const T*) const {}
@@ -762,7 +766,8 @@ class MpmCuda final : public Simulation {
     if (has_loads_) thr::fill(thr::device, impulse_.begin(), impulse_.end(), 0.0);
     // The vacuum's hold: an upward force f(t) m |g| on the held water (as MpmSolver::p2g).
     const T lift = T(double(dt) * scene_.basin.forcing.hold(time_) * std::fabs(scene_.solver.gravity[D - 1]));
-    mpm::tiled_for<T>(pkeys_.size(), P2GTiled<D, T>{{s, T(dt), lift}, raw(pstart_)});
+    const BlockTile<D> tile{raw(pkeys_), raw(pstart_)};
+    mpm::tiled_for<T>(pkeys_.size(), P2GTiled<D, T>{tile, {s, T(dt), lift}});
     if (s.has_sym) mpm::parallel_for(s.nodes, SymmetryFold<D, T>{s});
     mpm::parallel_for(s.nodes, GridUpdate<D, T>{s, T(dt)});
     if (debris_) find_coupling_nodes(s);
@@ -771,7 +776,7 @@ class MpmCuda final : public Simulation {
     if (s.has_sym) mpm::parallel_for(s.nodes, SymmetryMirror<D, T>{s});
     if (has_loads_) thr::copy(impulse_.begin(), impulse_.end(), load_impulse_.begin());
     if (debris_) couple_debris(s, double(dt));
-    mpm::tiled_for<T>(pkeys_.size(), G2PTiled<D, T>{{s, g2p_constants(s, T(dt))}, raw(pstart_)});
+    mpm::tiled_for<T>(pkeys_.size(), G2PTiled<D, T>{tile, {s, g2p_constants(s, T(dt))}});
     if (debris_) push_out_of_debris(s);
     host_fresh_ = false;
     audit(T(dt));

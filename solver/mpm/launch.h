@@ -7,7 +7,6 @@
 // Each build of it lives in its own inline namespace, so that the CPU's and the emulated CUDA backend's,
 // linked into one program, are different functions rather than one function defined twice.
 #pragma once
-#include <algorithm>
 #include <cstddef>
 #include <stdexcept>
 #include <string>

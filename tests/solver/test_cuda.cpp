@@ -346,10 +346,8 @@ TEST(CudaEmulation, AngularMomentumOfASpinningBlob) {
 // Debris: a box of 600 kg/m^3 dropped from 3 cm above a still tank's surface hits it at 0.08 s and plunges:
 // the coupling nodes round the box, the implicit exchange, the particles pushed out of the moving box and the
 // box's energy in the audit.
-Scene falling_box(const std::string& precision) {
-  Scene s = parse_scene_text(test::tank_scene(0.2, 0.1, 0.06, 600.0, 0.16, 0.02, 0.15), "falling_box.json");
-  s.solver.precision = precision == "float" ? Precision::kFloat : Precision::kDouble;
-  return s;
+Scene falling_box() {  // in double (the tank scene's default precision)
+  return parse_scene_text(test::tank_scene(0.2, 0.1, 0.06, 600.0, 0.16, 0.02, 0.15), "falling_box.json");
 }
 // The water must have stopped part of the fall for the comparison to mean anything: at the end the box falls
 // slower than in free fall by more than a tenth.
@@ -359,7 +357,7 @@ void expect_water_slowed_the_box(const Simulation& sim) {
   EXPECT_GT(v, 0.9 * free_fall);
 }
 TEST(CudaEmulation, FallingBox3DDoubleMatchesCpu) {
-  const Scene scene = falling_box("double");
+  const Scene scene = falling_box();
   expect_within(compare(scene, cpu, emulated), double_bounds(0.02, 0.1));
   auto sim = emulated(scene);
   ASSERT_EQ(test::run_until(*sim, scene.solver.end_time), RunStatus::kOk);
@@ -422,7 +420,7 @@ TEST(Cuda, MartinMoyce2DFloatFrontMatchesCpu) {
 }
 TEST(Cuda, FallingBox3DDoubleMatchesCpu) {
   SKIP_WITHOUT_DEVICE();
-  const Scene scene = falling_box("double");
+  const Scene scene = falling_box();
   expect_within(compare(scene, cpu, gpu), double_bounds(0.02, 0.1, 10));
   auto sim = gpu(scene);
   ASSERT_EQ(test::run_until(*sim, scene.solver.end_time), RunStatus::kOk);
@@ -482,4 +480,3 @@ TEST(CudaBench, ParticleStepsPerSecond) {
 
 }  // namespace
 }  // namespace flume
-
