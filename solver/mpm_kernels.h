@@ -334,10 +334,14 @@ FLUME_HD void project_velocity(T* v, const T* n, const T* vb, Bc bc, T mu) {
 // own rule. These functions add, per solid holding the node, the reflection's offset in nodes along the solid's
 // (axis-aligned) normal, and the axis to `axes`; `ambiguous` is set where the reflection is not defined (a normal
 // off the grid axes, two solids along one axis as inside a thin panel), and the node then keeps its velocity.
-// In cells: a node at least this far inside is a ghost node. Less 1e-6, so that a node half a cell inside (next to
-// a wall between two grid lines, such as the quay face at x = 4.45 m with dx = 0.02 m) is one whichever way the
-// round-off of its position falls.
-constexpr double kGhostDepth = 0.5 - 1e-6;
+// In cells: the margin by which every rule below compares a node's position with a wall. Walls mostly lie on grid
+// lines or half cells, so nodes sit exactly on the rules' thresholds, where the last bit of a coordinate (rounded
+// otherwise by a fused multiply-add, another compiler, a GPU) would decide; with the margin a node at a threshold
+// takes the side the rule states, whatever its round-off (tests/solver/test_geometry_ties.cpp).
+constexpr double kTieCells = 1e-6;
+// In cells: a node at least this far inside is a ghost node (a node half a cell inside, next to a wall between
+// two grid lines such as the quay face at x = 4.45 m with dx = 0.02 m, is one).
+constexpr double kGhostDepth = 0.5 - kTieCells;
 // In cells: how far the quadratic B-spline stencil reaches; a particle further than this from a node gives it
 // nothing, so water beyond a face cannot reach a node deeper than this inside the solid.
 constexpr double kStencilReach = 1.5;
@@ -354,7 +358,7 @@ FLUME_HD void ghost_axis_step(int axis, double depth_cells, int sign, int* offse
   }
   axes |= 1u << axis;
   if (sign < 0) axes |= 1u << (axis + kGhostSignShift);  // the fluid lies towards lower indices
-  offset[axis] += sign * static_cast<int>(2 * depth_cells + 0.5);  // the node nearest the reflection
+  offset[axis] += sign * static_cast<int>(2 * depth_cells + 0.5 + kTieCells);  // the node nearest the reflection
 }
 
 template <int D>
@@ -382,15 +386,16 @@ FLUME_HD void ghost_half_space(const double* x, const double* point, const doubl
 template <int D>
 FLUME_HD void ghost_box(const double* x, const double* lo, const double* hi, double dx, int* offset, unsigned& axes,
                         bool& ambiguous) {
+  const double tol = kTieCells * dx;
   for (int a = 0; a < D; ++a)
-    if (!(x[a] > lo[a] && x[a] < hi[a])) return;  // not strictly inside
-  const double reach = kStencilReach - 1e-6;
+    if (!(x[a] > lo[a] + tol && x[a] < hi[a] - tol)) return;  // not strictly inside
+  const double reach = kStencilReach - kTieCells;
   const unsigned axes_before = axes;
   int stepped = 0;
   for (int a = 0; a < D; ++a) {
     const double below = (x[a] - lo[a]) / dx, above = (hi[a] - x[a]) / dx;
     const unsigned seen = axes;
-    const bool thin = below <= 2 && above <= 2;  // a thin wall along a: undefined, as wall_faces holds it by both
+    const bool thin = below <= 2 + kTieCells && above <= 2 + kTieCells;  // undefined: wall_faces holds it by both
     if (below < reach || thin) ghost_axis_step(a, below, -1, offset, axes, ambiguous);
     if (above < reach || thin) ghost_axis_step(a, above, 1, offset, axes, ambiguous);
     stepped += axes != seen;
@@ -552,7 +557,7 @@ FLUME_HD T half_space_distance(const T* x, const T* point, const T* n, T* normal
 }
 
 // Which analytic wall holds grid node x, and through which face normals: a node on or in the wall (within
-// 1e-6 dx) is held, any other is free. Decided in double: walls usually sit on grid lines, and in float the
+// kTieCells dx) is held, any other is free. Decided in double: walls usually sit on grid lines, and in float the
 // node on the wall would fall on either side of it by round-off (docs/solver.md).
 //
 // A node inside a box is held by every face whose outside water can reach it, not only by the nearest: near
@@ -568,7 +573,7 @@ FLUME_HD T half_space_distance(const T* x, const T* point, const T* n, T* normal
 // subcell_cover below; docs/calibration.md).
 template <int D>
 FLUME_HD int wall_faces(const double* x, bool box, const double* a, const double* b, double dx, double (*n)[D]) {
-  const double tol = 1e-6 * dx;
+  const double tol = kTieCells * dx;
   double nd[D];
   const double dist = box ? box_distance<D>(x, a, b, nd) : half_space_distance<D>(x, a, b, nd);
   if (dist > tol) return 0;
@@ -578,16 +583,23 @@ FLUME_HD int wall_faces(const double* x, bool box, const double* a, const double
   }
   int count = 0;
   for (int ax = 0; ax < D; ++ax) {
-    const bool thin = x[ax] - a[ax] <= 2 * dx && b[ax] - x[ax] <= 2 * dx;
+    const bool thin = x[ax] - a[ax] <= 2 * dx + tol && b[ax] - x[ax] <= 2 * dx + tol;
     for (int side = 0; side < 2; ++side) {
       const double depth = side == 0 ? x[ax] - a[ax] : b[ax] - x[ax];  // distance in from this face
-      if (thin ? depth > 2 * dx : depth > kStencilReach * dx - tol) continue;
+      if (thin ? depth > 2 * dx + tol : depth > kStencilReach * dx - tol) continue;
       for (int d = 0; d < D; ++d) n[count][d] = d == ax ? (side == 0 ? -1.0 : 1.0) : 0.0;
       ++count;
     }
   }
-  if (count == 0) {  // deep inside: the nearest face
-    for (int d = 0; d < D; ++d) n[0][d] = nd[d];
+  if (count == 0) {  // deep inside: the nearest face; of faces equally near, the first in axis order, low side first
+    double nearest = 1e300;
+    for (int ax = 0; ax < D; ++ax)
+      for (int side = 0; side < 2; ++side) {
+        const double depth = side == 0 ? x[ax] - a[ax] : b[ax] - x[ax];
+        if (!(depth < nearest - tol)) continue;
+        nearest = depth;
+        for (int d = 0; d < D; ++d) n[0][d] = d == ax ? (side == 0 ? -1.0 : 1.0) : 0.0;
+      }
     count = 1;
   }
   return count;
@@ -625,7 +637,7 @@ FLUME_HD double subcell_cover(const double* x, const double* lo, const double* h
     const double s = x[a] < lo[a] ? lo[a] - x[a] : (x[a] > hi[a] ? x[a] - hi[a] : 0.0);
     if (axes & (1u << a))
       cover *= s < dx ? 1 - s / dx : 0.0;
-    else if (s > 1e-6 * dx)
+    else if (s > kTieCells * dx)
       return 0;  // along the other axes a node outside the box is not covered at all, as before
     nearest[a] = x[a] < lo[a] ? lo[a] : (x[a] > hi[a] ? hi[a] : x[a]);
   }

@@ -116,9 +116,9 @@ FLUME_HD bool apply_boundaries(const double* xn, T m, T* v, T dt, double load_we
   // The domain box is a container: nodes on or beyond its faces are walls.
   for (int d = 0; d < D; ++d) {
     T n[D] = {};
-    if (xn[d] <= container.lo[d] + 1e-6 * dx) {
+    if (xn[d] <= container.lo[d] + kTieCells * dx) {
       n[d] = T(1);
-    } else if (xn[d] >= container.hi[d] - 1e-6 * dx) {
+    } else if (xn[d] >= container.hi[d] - kTieCells * dx) {
       n[d] = T(-1);
     } else {
       continue;
