@@ -1,8 +1,8 @@
 // Two-way coupling of rigid debris (RigidWorld, Bullet contact) with the MPM water, through the grid.
 //
 // Each step, after the grid velocities are updated and the scene's walls applied, every grid node with water
-// mass in or within one cell of a debris box (signed distance <= dx; why one cell: mpm_solver.cpp,
-// coupling_band_) is a moving-wall node of that box: like a wall node,
+// mass in or within one cell of a debris box (signed distance <= dx; why one cell: solver/mpm/cpu_debris.h,
+// CpuDebris::kBand) is a moving-wall node of that box: like a wall node,
 // its velocity may not approach the box's surface (the `separate` condition of eq. 2, no friction: the water
 // may leave the box, slide along it, not enter it). The impulse that removes the approach is what the water
 // and the box exchange.

@@ -1,7 +1,7 @@
 // The debris coupling's per-node and per-particle bodies, written once for both backends (the CPU's grid update
-// and G2P in mpm_solver.cpp, the CUDA kernels in cuda/mpm_cuda.cu). The exchange itself, a small implicit solve
-// over the nodes found and the rigid bodies' step, stays on the host: solver/debris_coupling.h explains the
-// method.
+// and G2P through solver/mpm/cpu_debris.h, the CUDA kernels in cuda/mpm_cuda.cu). The exchange itself, a small
+// implicit solve over the nodes found and the rigid bodies' step, stays on the host: solver/debris_coupling.h
+// explains the method.
 #pragma once
 #include <cstdint>
 

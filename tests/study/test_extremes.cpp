@@ -228,7 +228,7 @@ TEST_P(ExtremeValue, EndsOkConservingOrUnstableWithAMessage) {
         << c.name << ": metric " << it.key() << " = " << it.value().dump();
 
   if (out.status == store::RunStatus::kUnstable) {
-    // The message says what went wrong, when and where (solver/mpm_solver.cpp composes it).
+    // The message says what went wrong, when and where (solver/mpm/audit.h composes it).
     const std::string m = run.at("message").get<std::string>();
     EXPECT_NE(m.find(" at t = "), std::string::npos) << c.name << ": '" << m << "'";
     EXPECT_TRUE(m.find("non-finite") != std::string::npos || m.find("left the domain") != std::string::npos ||

@@ -1,0 +1,132 @@
+// MpmSolver (solver/mpm/cpu_solver.h): the checkpoint, the energy audit's sums and the diagnostics (particle
+// fields for output, momentum, a rigid initial motion).
+#include <algorithm>
+#include <cmath>
+
+#include "solver/interleave_axes.h"
+#include "solver/mpm/cpu_solver.h"
+#include "solver/mpm/diagnostics_k.h"
+
+namespace flume::mpm {
+
+// Everything a step reads that an earlier step wrote: the particles, the clock, the step-size control, the
+// energy audit, the instruments, the inflow and the debris, and the block each particle was last sorted into.
+// The block lists and the grid are rebuilt from those, so a resumed run repeats the uninterrupted one step
+// for step, to the bit.
+template <int D, typename T>
+void MpmSolver<D, T>::checkpoint(StateArchive& ar) {
+  ar.section(std::string("mpm ") + std::to_string(D) + "D " + (sizeof(T) == 4 ? "float" : "double"));
+  for (int d = 0; d < D; ++d) {
+    ar(x_[d]);
+    ar(v_[d]);
+  }
+  for (auto& c : C_) ar(c);
+  ar(e_);
+  ar(vol_);
+  ar(held_);
+  ar(tag_);
+  ar.fields(time_, dt_, max_speed_, steps_, energy0_, energy_slack_, last_energy_, mass_, status_, message_);
+  ar.fields(needs_sort_, blocks_.key);  // not a function of the positions (BlockGrid::key)
+  instruments_.checkpoint(ar);
+  ar.expect("inflow", inflow_ ? 1 : 0);
+  if (inflow_) inflow_->checkpoint(ar);
+  ar.expect("debris", debris_ ? 1 : 0);
+  if (debris_) debris_->bodies().checkpoint(ar);
+  if (ar.loading()) {
+    n_ = x_[0].size();
+    const auto bad = [&](const std::vector<T>& a) { return a.size() != n_; };
+    bool mismatch = bad(e_) || bad(vol_) || (!held_.empty() && bad(held_)) || (!tag_.empty() && bad(tag_));
+    for (int d = 0; d < D; ++d) mismatch = mismatch || bad(x_[d]) || bad(v_[d]);
+    for (auto& c : C_) mismatch = mismatch || bad(c);
+    if (mismatch) ar.fail("particles", "particle arrays of different lengths");
+    if (status_ == RunStatus::kUnstable) ar.fail("status", "the checkpointed run had gone unstable");
+    // A finished run resumed to a later end time runs on.
+    status_ = time_ < scene_.solver.end_time - 1e-12 ? RunStatus::kRunning : RunStatus::kOk;
+    if (!needs_sort_) {
+      if (blocks_.key.size() != n_) ar.fail("particles", "block keys for a different particle count");
+      blocks_.build(n_, grid_lo_, dx_, walls_);
+      fit_to_blocks();
+    }
+  }
+}
+
+template <int D, typename T>
+typename MpmSolver<D, T>::Energy MpmSolver<D, T>::energy() const {
+  double ke = 0, pe = 0, el = 0;
+#pragma omp parallel for reduction(+ : ke, pe, el) schedule(static)
+  for (size_t i = 0; i < n_; ++i) {
+    double v2 = 0, gx = 0;
+    for (int d = 0; d < D; ++d) {
+      v2 += double(v_[d][i]) * v_[d][i];
+      gx += double(gravity_[d]) * x_[d][i];
+    }
+    const double V = vol_[i], mp = rho_ * V;
+    ke += 0.5 * mp * v2;
+    pe -= mp * gx;
+    el += V * law_d_.energy_density(double(e_[i]));
+  }
+  return {ke, pe, el, debris_ ? debris_->bodies().energy() : 0.0};
+}
+
+template <int D, typename T>
+void MpmSolver<D, T>::particle_positions(std::vector<double>& xyz) const {
+  interleave_axes<D>(x_, n_, xyz);
+}
+
+template <int D, typename T>
+void MpmSolver<D, T>::particle_velocities(std::vector<double>& vel) const {
+  interleave_axes<D>(v_, n_, vel);
+}
+
+template <int D, typename T>
+void MpmSolver<D, T>::particle_pressures(std::vector<double>& p) const {
+  p.resize(n_);
+  for (size_t i = 0; i < n_; ++i) p[i] = law_d_.pressure(double(e_[i]));
+}
+
+template <int D, typename T>
+void MpmSolver<D, T>::momentum(double linear[3], double angular[3]) const {
+  for (int d = 0; d < 3; ++d) linear[d] = angular[d] = 0;
+  for (size_t i = 0; i < n_; ++i) {
+    double x[D], v[D], C[D * D];
+    for (int d = 0; d < D; ++d) {
+      x[d] = x_[d][i];
+      v[d] = v_[d][i];
+    }
+    for (int k = 0; k < D * D; ++k) C[k] = C_[k][i];
+    add_particle_momentum<D>(rho_ * double(vol_[i]), dx_, x, v, C, linear, angular);
+  }
+}
+
+template <int D, typename T>
+void MpmSolver<D, T>::set_rigid_velocity(const double v0[3], const double omega[3], const double centre[3]) {
+  for (size_t i = 0; i < n_; ++i) {
+    double r[D], v[D], C[D * D];
+    for (int d = 0; d < D; ++d) r[d] = x_[d][i] - centre[d];
+    rigid_motion<D>(v0, omega, r, v, C);
+    for (int d = 0; d < D; ++d) v_[d][i] = T(v[d]);
+    for (int k = 0; k < D * D; ++k) C_[k][i] = T(C[k]);
+  }
+  max_speed_ = 0;
+  for (size_t i = 0; i < n_; ++i) {
+    double s2 = 0;
+    for (int d = 0; d < D; ++d) s2 += double(v_[d][i]) * v_[d][i];
+    max_speed_ = std::max(max_speed_, std::sqrt(s2));
+  }
+  energy0_ = energy().total();
+  double ke = energy().kinetic;
+  energy_slack_ = std::max(energy_slack_, 0.01 * ke);
+}
+
+#define FLUME_INSTANTIATE(D, T)                                                   \
+  template void MpmSolver<D, T>::checkpoint(StateArchive&);                       \
+  template MpmSolver<D, T>::Energy MpmSolver<D, T>::energy() const;               \
+  template void MpmSolver<D, T>::particle_positions(std::vector<double>&) const;  \
+  template void MpmSolver<D, T>::particle_velocities(std::vector<double>&) const; \
+  template void MpmSolver<D, T>::particle_pressures(std::vector<double>&) const;  \
+  template void MpmSolver<D, T>::momentum(double[3], double[3]) const;            \
+  template void MpmSolver<D, T>::set_rigid_velocity(const double[3], const double[3], const double[3]);
+FLUME_MPM_CPU_VARIANTS(FLUME_INSTANTIATE)
+#undef FLUME_INSTANTIATE
+
+}  // namespace flume::mpm

@@ -1,0 +1,219 @@
+// MpmSolver::g2p (solver/mpm/cpu_solver.h): each particle block gathers its tile of nodes once, then updates
+// its particles (mpm::g2p_particle, solver/mpm/particle_k.h, shared with the CUDA backend) with separable
+// stencil sums; pushes particles out of debris boxes; sums the energy audit and checks for blow-up.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "solver/mpm/audit.h"
+#include "solver/mpm/cpu_solver.h"
+#include "solver/mpm/particle_k.h"
+
+namespace flume::mpm {
+
+// G2P: new velocity, affine matrix, J (with J-bar mixing) and position; checks for blow-up.
+template <int D, typename T>
+void MpmSolver<D, T>::g2p(T dt) {
+  const T dx = T(dx_);
+  const T cscale = T(4) * inv_dx_ * inv_dx_;
+  const T fill_rate = T(mpm::fill_rate(double(dt), c_, dx_));
+  // Locals of the members the particle loop reads: its stores to the particle arrays could alias a member
+  // of type T, which the compiler would then reload (and the Tait law's set-up redo) for every particle.
+  const mpm::TaitLaw<T> law = law_;
+  const T inv_dx = inv_dx_;
+  mpm::G2pConstants<D, T> g2p_k;
+  g2p_k.dt = dt;
+  g2p_k.psi = psi_;
+  g2p_k.fill_rate = fill_rate;
+  g2p_k.fill_tol = fill_tolerance_;
+  g2p_k.law_d = law_d_;
+  g2p_k.has_sym = has_sym_;
+  g2p_k.sym = sym_;
+  T lo_grid[D], grav[D];
+  for (int d = 0; d < D; ++d) {
+    g2p_k.slope[d] = strain_slope_[d];
+    lo_grid[d] = T(grid_lo_[d]);
+    grav[d] = gravity_[d];
+  }
+  const double rho = rho_;
+  const long nblocks = static_cast<long>(blocks_.pkeys.size());
+  double vmax2 = 0, ke = 0, pe = 0, el = 0, fill_work = 0;
+  long bad = std::numeric_limits<long>::max();
+  int bad_kind = 0;
+  bool resort = false;
+  double lo_ok[D], hi_ok[D];
+  for (int d = 0; d < D; ++d) {
+    lo_ok[d] = scene_.domain_lo[d] - dx_;
+    hi_ok[d] = scene_.domain_hi[d] + dx_;
+  }
+  if (debris_) debris_->begin_g2p(nblocks);
+  static const std::vector<mpm::TileNode> tile_map = mpm::make_tile_map<D>();
+#pragma omp parallel for schedule(dynamic, 4) reduction(max : vmax2) reduction(+ : ke, pe, el, fill_work) reduction(|| : resort)
+  for (long p = 0; p < nblocks; ++p) {
+    const bool near_debris =
+        debris_ && debris_->near_particle_block(blocks_.pkeys[p], 2 * dx_, grid_lo_, dx_);
+    double* push_slots = near_debris ? debris_->block_slots(p) : nullptr;
+    T vmax2_b = 0, ke_b = 0, pe_b = 0, el_b = 0;
+    // Gather the tile around this block: per node the velocity, then (free nodes only) strain, fill and
+    // weight.
+    alignas(64) T tg[kTileNodes * kLanes];
+    int blk[D], origin[D];
+    unpack_key<D>(blocks_.pkeys[p], blk);
+    for (int d = 0; d < D; ++d) origin[d] = blk[d] * kBlock - 1;
+    // Only the tile box P2G found (the particles have not moved since): the rest of tg is never read.
+    const auto fetch = [&](int a) {
+      const int32_t g = blocks_.p_nbr[p * kNbr + tile_map[a].block];
+      const size_t idx = static_cast<size_t>(g) * kNodes + tile_map[a].local;
+      T* t = tg + a * kLanes;
+      for (int d = 0; d < D; ++d) t[d] = grid_.v[d][idx];
+      const T free = grid_.wall[idx] ? T(0) : T(1);
+      t[D] = free * grid_.e[idx];
+      t[D + 1] = free * grid_.fill[idx];
+      t[D + 2] = free;
+      for (int c = D + 3; c < kLanes; ++c) t[c] = T(0);
+    };
+    mpm::for_each_box_row<D>(tile_box_[p], [&](int a, int len) {
+      for (int k = 0; k < len; ++k) fetch(a + k);
+    });
+    // The stencil weights of a batch of particles first, in a loop of their own; then the gather and update
+    // one particle at a time.
+    for (uint32_t b0 = blocks_.pstart[p]; b0 < blocks_.pstart[p + 1]; b0 += kBatch) {
+      const int nb = static_cast<int>(std::min<uint32_t>(kBatch, blocks_.pstart[p + 1] - b0));
+      alignas(64) T bw[D][3][kBatch], bf[D][kBatch];
+      alignas(64) int brel[D][kBatch];
+      for (int d = 0; d < D; ++d) {
+        const T* xd = x_[d].data() + b0;
+        for (int j = 0; j < nb; ++j) {
+          T fj, w[3];
+          brel[d][j] = mpm::stencil_base((xd[j] - lo_grid[d]) * inv_dx, fj) - origin[d];
+          mpm::bspline_weights(fj, w);
+          bf[d][j] = fj;
+          for (int c = 0; c < 3; ++c) bw[d][c][j] = w[c];
+        }
+      }
+      for (int j = 0; j < nb; ++j) {
+        const uint32_t i = b0 + j;
+        T w[D][3], f[D];
+        int rel[D];
+        for (int d = 0; d < D; ++d) {
+          rel[d] = brel[d][j];
+          f[d] = bf[d][j];
+          for (int c = 0; c < 3; ++c) w[d][c] = bw[d][c][j];
+        }
+        // Separable sums over the stencil: S = sum w n, and M[b] = sum w i_b n (i_b the node's offset 0, 1, 2
+        // on axis b), n the node's lanes. Then v = S[0..D), the APIC matrix C_ab = sum w v_a (i_b - f_b) dx
+        // = (M[b][a] - f_b S[a]) dx, and the free-node sums of strain, fill and weight are S[D..D+3).
+        Lane S = Lane::Zero(), M[D];
+        for (int b = 0; b < D; ++b) M[b] = Lane::Zero();
+        if constexpr (D == 2) {
+          for (int i0 = 0; i0 < 3; ++i0) {
+            const T* n = tg + ((rel[0] + i0) * kTile + rel[1]) * kLanes;
+            const Lane n1 = ConstLaneMap(n + kLanes), n2 = ConstLaneMap(n + 2 * kLanes);
+            const Lane r = w[1][0] * ConstLaneMap(n) + w[1][1] * n1 + w[1][2] * n2;
+            const Lane r1 = w[1][1] * n1 + (T(2) * w[1][2]) * n2;
+            S += w[0][i0] * r;
+            M[0] += (T(i0) * w[0][i0]) * r;
+            M[1] += w[0][i0] * r1;
+          }
+        } else {
+          for (int i0 = 0; i0 < 3; ++i0) {
+            Lane S1 = Lane::Zero(), M1 = Lane::Zero(), M2 = Lane::Zero();
+            for (int i1 = 0; i1 < 3; ++i1) {
+              const T* n = tg + (((rel[0] + i0) * kTile + rel[1] + i1) * kTile + rel[2]) * kLanes;
+              const Lane n1 = ConstLaneMap(n + kLanes), n2 = ConstLaneMap(n + 2 * kLanes);
+              const Lane r = w[2][0] * ConstLaneMap(n) + w[2][1] * n1 + w[2][2] * n2;
+              const Lane r2 = w[2][1] * n1 + (T(2) * w[2][2]) * n2;
+              S1 += w[1][i1] * r;
+              M1 += (T(i1) * w[1][i1]) * r;
+              M2 += w[1][i1] * r2;
+            }
+            S += w[0][i0] * S1;
+            M[0] += (T(i0) * w[0][i0]) * S1;
+            M[1] += w[0][i0] * M1;
+            M[2] += w[0][i0] * M2;
+          }
+        }
+        T vn[D], Cn[D * D];
+        for (int a = 0; a < D; ++a) {
+          vn[a] = S[a];
+          for (int b = 0; b < D; ++b) Cn[a * D + b] = (M[b][a] - f[b] * S[a]) * dx;
+        }
+        const T Jg = S[D], Fg = S[D + 1], wsum = S[D + 2];
+        for (int k = 0; k < D * D; ++k) Cn[k] *= cscale;
+        T xp[D];
+        for (int d = 0; d < D; ++d) xp[d] = x_[d][i];
+        T e = e_[i];
+        fill_work += mpm::g2p_particle<D>(g2p_k, Jg, Fg, wsum, vol_[i], e, xp, vn, Cn);
+        e_[i] = e;
+        T v2 = 0, gx = 0;
+        bool finite = std::isfinite(e) && e > T(-1);
+        bool inside = true;
+        for (int d = 0; d < D; ++d) {
+          v_[d][i] = vn[d];
+          x_[d][i] = xp[d];
+        }
+        if (near_debris) debris_->push_out(x_, v_, rho_ * double(vol_[i]), i, push_slots);
+        for (int d = 0; d < D; ++d) {
+          const T xn = x_[d][i], vd = v_[d][i];
+          finite &= std::isfinite(xn) && std::isfinite(vd);
+          inside &= xn >= T(lo_ok[d]) && xn <= T(hi_ok[d]);
+          v2 += vd * vd;
+          gx += grav[d] * xn;
+        }
+        for (int k = 0; k < D * D; ++k) C_[k][i] = Cn[k];
+        if (!finite || !inside) {
+#pragma omp critical(flume_bad_particle)
+          if (static_cast<long>(i) < bad) {
+            bad = static_cast<long>(i);
+            bad_kind = finite ? 2 : 1;
+          }
+          continue;
+        }
+        // The audit's sums, per block in T (the audit's slack is 1 % of the energy scale; a float block sum
+        // is good to 1e-6 of it) and then in double across blocks.
+        const T V = vol_[i];
+        vmax2_b = std::max(vmax2_b, v2);
+        ke_b += V * v2;
+        pe_b -= V * gx;
+        el_b += V * law.energy_density(e);
+      }
+    }
+    {  // a particle drifted out of the tile margin: re-sort before the next scatter
+      const T* xs[D];
+      for (int d = 0; d < D; ++d) xs[d] = x_[d].data();
+      int lo[D], hi[D];
+      mpm::stencil_base_range<D>(xs, blocks_.pstart[p], blocks_.pstart[p + 1], lo_grid, inv_dx, lo, hi);
+      for (int d = 0; d < D; ++d) resort |= lo[d] - origin[d] < 0 || hi[d] - origin[d] > kBlock + 1;
+    }
+    vmax2 = std::max(vmax2, double(vmax2_b));
+    ke += 0.5 * rho * double(ke_b);
+    pe += rho * double(pe_b);
+    el += double(el_b);
+  }
+  if (debris_) debris_->end_g2p(nblocks);  // the pushed-out particles' momentum to the boxes
+  max_speed_ = std::sqrt(vmax2);
+  needs_sort_ = resort;
+  // The volume constraint (mpm::fill_correction) does work on the water that the audit cannot otherwise
+  // see: it restores the elastic energy of water that crowded without compressing. What it adds is counted
+  // as supplied energy; what it removes (lowering J of water in tension) is dissipation and is not
+  // (crediting it hid an energy rise at a dam-break front: docs/solver.md).
+  energy0_ += fill_work;
+  const double t_new = time_ + double(dt);
+  if (bad != std::numeric_limits<long>::max()) {
+    double xp[D];
+    for (int d = 0; d < D; ++d) xp[d] = x_[d][bad];
+    fail(mpm::bad_particle_message(bad_kind, t_new, steps_ + 1, double(dt), bad, xp, D));
+    return;
+  }
+  const double e_debris = debris_ ? debris_->bodies().energy() : 0.0;
+  const double e = ke + pe + el + e_debris;
+  if (e > energy0_ + energy_slack_)
+    fail(mpm::energy_growth_message<D>(t_new, steps_ + 1, e, energy0_, max_speed_, x_, v_, n_));
+  last_energy_ = {ke, pe, el, e_debris};
+}
+
+#define FLUME_INSTANTIATE(D, T) template void MpmSolver<D, T>::g2p(T);
+FLUME_MPM_CPU_VARIANTS(FLUME_INSTANTIATE)
+#undef FLUME_INSTANTIATE
+
+}  // namespace flume::mpm

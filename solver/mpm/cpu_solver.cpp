@@ -1,0 +1,224 @@
+// MpmSolver (solver/mpm/cpu_solver.h): set-up, the step and its stage clock, the block grid's sizing, the
+// inflow, the memory figures; and make_cpu_simulation, the CPU backend's factory.
+#include "solver/mpm/cpu_solver.h"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "common/errors.h"
+#include "solver/mpm/audit.h"
+#include "solver/seeding.h"
+
+namespace flume {
+namespace mpm {
+
+template <int D, typename T>
+MpmSolver<D, T>::MpmSolver(const Scene& scene, const SimulationOptions& options)
+    : scene_(scene), instruments_(scene_) {
+  if (options.threads > 0) omp_set_num_threads(options.threads);
+  dx_ = scene.solver.dx;
+  inv_dx_ = T(1) / T(dx_);
+  for (int d = 0; d < D; ++d) {
+    grid_lo_[d] = scene.domain_lo[d] - kPad * dx_;
+    gravity_[d] = T(scene.solver.gravity[d]);
+  }
+  const auto& f = scene.fluid;
+  mu_ = T(f.viscosity);
+  psi_ = T(f.jbar_psi);
+  law_ = TaitLaw<T>(T(f.bulk_modulus), T(f.gamma));
+  law_d_ = TaitLaw<double>(double(law_.K), double(law_.gamma));
+  fill_tolerance_ = T(kFillTolerance);
+  for (int d = 0; d < D; ++d) strain_slope_[d] = T(-f.density * scene.solver.gravity[d] / f.bulk_modulus);
+  c_ = sound_speed(f.bulk_modulus, f.density);
+  ghosts_.set_push_axes(image_push_axes<D>(scene.solver.gravity.data()));
+  if (scene.debris.present) {
+    if constexpr (D != 3) throw InputError(scene.file, "debris", "debris need a 3D scene");
+    debris_ = std::make_unique<CpuDebris<D, T>>(scene_);
+  }
+  seed_particles();
+  if (scene.inflow.present) {  // the buffer of the inflow boundary (solver/inflow.h)
+    inflow_ = std::make_unique<InflowBoundary<D, T>>(scene_, spacing_, particle_arrays());
+    inflow_->seed();
+    n_ = x_[0].size();
+    mass_ = water_mass(vol_, rho_);
+  }
+  setup_boundaries();
+  sort_particles();
+  const Energy e = energy();
+  energy0_ = e.total();
+  energy_slack_ = mpm::energy_slack(scene_, mass_, e.kinetic);
+  if (inflow_) energy_slack_ = std::max(energy_slack_, inflow_->energy_scale());
+  instruments_.sample(*this, 0.0, 0.0, true);
+}
+
+template <int D, typename T>
+RunStatus MpmSolver<D, T>::step() {
+  if (status_ != RunStatus::kRunning) return status_;
+  double dt = std::min(scene_.solver.max_dt, scene_.solver.cfl * dx_ / (c_ + max_speed_));
+  const double remaining = scene_.solver.end_time - time_;
+  if (dt >= remaining) dt = remaining;
+  if (!(dt > 0)) {
+    status_ = RunStatus::kOk;
+    return status_;
+  }
+  double t = omp_get_wtime();
+  const auto lap = [&](int stage) {  // adds the time since the last lap to a stage (stage_seconds)
+    const double now = omp_get_wtime();
+    stage_s_[stage] += now - t;
+    t = now;
+  };
+  if (needs_sort_) sort_particles();
+  lap(kStageSort);
+  p2g(T(dt));
+  lap(kStageP2g);
+  grid_update(T(dt));
+  lap(kStageGrid);
+  g2p(T(dt));
+  lap(kStageG2p);
+  time_ += dt;
+  dt_ = dt;
+  ++steps_;
+  if (inflow_ && status_ == RunStatus::kRunning) apply_inflow(time_ - dt, time_);
+  if (status_ == RunStatus::kUnstable) {
+    instruments_.sample(*this, time_, dt, true);
+    return status_;
+  }
+  instruments_.add_impulses(load_impulse_, dt);
+  instruments_.sample(*this, time_, dt, false);
+  lap(kStageOther);
+  if (time_ >= scene_.solver.end_time - 1e-12) status_ = RunStatus::kOk;
+  return status_;
+}
+
+template <int D, typename T>
+void MpmSolver<D, T>::seed_particles() {
+  const int per_axis = static_cast<int>(std::lround(std::pow(scene_.solver.ppc, 1.0 / D)));
+  spacing_ = dx_ / per_axis;
+  rho_ = scene_.fluid.density;
+  // Water is not seeded inside a debris box: the box displaces it.
+  const Seeds seeds =
+      seed_water<D>(scene_, spacing_, displaced_by<D>(debris_ ? &debris_->bodies() : nullptr));
+  n_ = seeds.size();
+  for (int d = 0; d < D; ++d) {
+    x_[d].assign(seeds.x[d].begin(), seeds.x[d].end());
+    v_[d].assign(n_, T(0));
+  }
+  for (int k = 0; k < D * D; ++k) C_[k].assign(n_, T(0));
+  e_.assign(seeds.strain.begin(), seeds.strain.end());
+  vol_.assign(seeds.volume.begin(), seeds.volume.end());
+  if (seeds.any_held) held_.assign(seeds.held.begin(), seeds.held.end());
+  mass_ = water_mass(vol_, rho_);
+}
+
+template <int D, typename T>
+ParticleArrays<D, T> MpmSolver<D, T>::particle_arrays() {
+  ParticleArrays<D, T> a;
+  for (int d = 0; d < D; ++d) {
+    a.x[d] = &x_[d];
+    a.v[d] = &v_[d];
+  }
+  for (int k = 0; k < D * D; ++k) a.C[k] = &C_[k];
+  a.e = &e_;
+  a.vol = &vol_;
+  a.held = &held_;
+  a.tag = &tag_;
+  return a;
+}
+
+template <int D, typename T>
+void MpmSolver<D, T>::sort_particles() {
+  blocks_.sort(particle_arrays(), n_, grid_lo_, inv_dx_, dx_, walls_);
+  fit_to_blocks();
+}
+
+template <int D, typename T>
+void MpmSolver<D, T>::fit_to_blocks() {
+  if (has_sym_) {
+    zone_.index(blocks_.gkeys);
+    sym_acc_.resize(zone_.entries());
+  }
+  grid_.resize(blocks_.gkeys.size() * kNodes);
+  tiles_.resize(blocks_.pkeys.size() * kLanes * kTileNodes);
+  tile_box_.resize(blocks_.pkeys.size());
+  needs_sort_ = false;
+}
+
+// The inflow moves, adds and removes particles after the step; the energy audit is told what it did.
+template <int D, typename T>
+void MpmSolver<D, T>::apply_inflow(double t0, double t1) {
+  const auto change = inflow_->apply(t0, t1);
+  energy0_ += change.energy;
+  n_ = x_[0].size();
+  if (change.structural) mass_ = water_mass(vol_, rho_);
+  needs_sort_ = needs_sort_ || change.structural;
+}
+
+template <int D, typename T>
+void MpmSolver<D, T>::fail(const std::string& what) {
+  status_ = RunStatus::kUnstable;
+  message_ = what;
+}
+
+template <int D, typename T>
+size_t MpmSolver<D, T>::grid_bytes() const {
+  return grid_.bytes() + tiles_.capacity() * sizeof(T) + blocks_.bytes();
+}
+
+template <int D, typename T>
+std::vector<std::pair<std::string, double>> MpmSolver<D, T>::stage_seconds() const {
+  return {{"sort", stage_s_[kStageSort]},
+          {"p2g", stage_s_[kStageP2g]},
+          {"grid", stage_s_[kStageGrid]},
+          {"g2p", stage_s_[kStageG2p]},
+          {"instruments", stage_s_[kStageOther]}};
+}
+
+// The memory traffic of a step without a sort, counted from what the loops touch: P2G reads the particle
+// state (x, v, C, e, vol) and writes its tile box; the grid update reads the tiles and writes the node
+// arrays; G2P reads the nodes into its tile, reads x, e and vol and writes x, v, C and e.
+template <int D, typename T>
+double MpmSolver<D, T>::bytes_per_step() const {
+  const double particles_read = double(n_) * sizeof(T) * (2 * D + D * D + 2);
+  const double particles_g2p = double(n_) * sizeof(T) * ((D + 2) + (2 * D + D * D + 1));
+  double tile_nodes = 0;
+  for (const TileBox& b : tile_box_) {
+    double v = 1;
+    for (int d = 0; d < D; ++d) v *= b.hi[d] - b.lo[d];
+    tile_nodes += v;
+  }
+  const double tiles = 2 * tile_nodes * kLanes * sizeof(T);  // written by P2G, read by the gather
+  const double nodes = double(blocks_.gkeys.size()) * kNodes;
+  const double grid = nodes * ((D + 3) * sizeof(T) + 1) + tile_nodes * ((D + 2) * sizeof(T) + 1);
+  return particles_read + particles_g2p + tiles + grid;
+}
+
+#define FLUME_INSTANTIATE(D, T)                                                                \
+  template MpmSolver<D, T>::MpmSolver(const Scene&, const SimulationOptions&);                 \
+  template RunStatus MpmSolver<D, T>::step();                                                  \
+  template void MpmSolver<D, T>::seed_particles();                                             \
+  template ParticleArrays<D, T> MpmSolver<D, T>::particle_arrays();                            \
+  template void MpmSolver<D, T>::sort_particles();                                             \
+  template void MpmSolver<D, T>::fit_to_blocks();                                              \
+  template void MpmSolver<D, T>::apply_inflow(double, double);                                 \
+  template void MpmSolver<D, T>::fail(const std::string&);                                     \
+  template size_t MpmSolver<D, T>::grid_bytes() const;                                         \
+  template std::vector<std::pair<std::string, double>> MpmSolver<D, T>::stage_seconds() const; \
+  template double MpmSolver<D, T>::bytes_per_step() const;
+FLUME_MPM_CPU_VARIANTS(FLUME_INSTANTIATE)
+#undef FLUME_INSTANTIATE
+
+}  // namespace mpm
+
+std::unique_ptr<Simulation> make_cpu_simulation(const Scene& scene, const SimulationOptions& options) {
+  const bool f = scene.solver.precision == Precision::kFloat;
+  if (scene.dimension == 2) {
+    if (f) return std::make_unique<mpm::MpmSolver<2, float>>(scene, options);
+    return std::make_unique<mpm::MpmSolver<2, double>>(scene, options);
+  }
+  if (f) return std::make_unique<mpm::MpmSolver<3, float>>(scene, options);
+  return std::make_unique<mpm::MpmSolver<3, double>>(scene, options);
+}
+
+}  // namespace flume
