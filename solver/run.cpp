@@ -181,9 +181,6 @@ RunOutcome run_scene(const Scene& scene, const SimulationOptions& options, const
                      bool progress, const CheckpointOptions& checkpoints, double flush_every_s) {
   namespace fs = std::filesystem;
   const bool checkpointing = checkpoints.every_s > 0 || checkpoints.resume;
-  if (checkpointing && scene.solver.method == SolverMethod::kSph)
-    throw InputError(scene.file, "solver.method", "SPH does not checkpoint yet: run without --checkpoint-every/--resume, "
-                                                  "or with solver.method mpm");
   std::error_code ec;
   fs::create_directories(out_dir, ec);
   if (ec) throw InputError(out_dir, "--out", "cannot create the output directory: " + ec.message());

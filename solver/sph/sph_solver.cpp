@@ -185,10 +185,37 @@ class SphSolver final : public Simulation {
     energy_slack_ = std::max(energy_slack_, 0.01 * e.kinetic);
   }
 
+  // Everything a step reads that an earlier step wrote: the fluid particles in their last cell order (the
+  // step's sort is stable, so the order it starts from decides the order it ends in, and with it every sum's),
+  // their sub-particle stress, the walls' densities, the clock, the energy audit and the instruments. The cell
+  // lists and the rates are rebuilt at the start of the next step, so a resumed run repeats the uninterrupted
+  // one to the bit.
   void checkpoint(StateArchive& ar) override {
-    throw InputError(
-        ar.file().empty() ? std::string("--checkpoint-every") : ar.file(), "solver.method",
-        "SPH does not checkpoint yet: run without --checkpoint-every/--resume, or with solver.method mpm");
+    ar.section(std::string("sph ") + std::to_string(D) + "D " + (sizeof(T) == 4 ? "float" : "double"));
+    for (int d = 0; d < D; ++d) {
+      ar(x_[d]);
+      ar(v_[d]);
+    }
+    ar(rho_);
+    ar(mass_);
+    ar(vol_);
+    ar(held_);
+    for (auto& t : tau_) ar(t);
+    ar.expect("wall particles", nw_);
+    ar(rhow_);
+    ar.fields(time_, dt_, max_speed_, steps_, interactions_, energy0_, energy_slack_, last_energy_, mass_total_,
+              status_, message_);
+    instruments_.checkpoint(ar);
+    if (!ar.loading()) return;
+    const size_t n = x_[0].size();
+    const auto bad = [&](const std::vector<T>& a) { return a.size() != n; };
+    bool mismatch = bad(rho_) || bad(mass_) || bad(vol_) || (!held_.empty() && bad(held_)) || rhow_.size() != nw_;
+    for (int d = 0; d < D; ++d) mismatch = mismatch || bad(x_[d]) || bad(v_[d]);
+    for (auto& t : tau_) mismatch = mismatch || bad(t);
+    if (mismatch || n != n_) ar.fail("particles", "particle arrays of another length than the scene seeds");
+    if (status_ == RunStatus::kUnstable) ar.fail("status", "the checkpointed run had gone unstable");
+    // A finished run resumed to a later end time runs on.
+    status_ = time_ < scene_.solver.end_time - 1e-12 ? RunStatus::kRunning : RunStatus::kOk;
   }
 
   // --- read access for the instruments ---

@@ -144,7 +144,7 @@ void expect_exact_resume(const Scene& scene, double t_stop, const Factory& make 
 
 // A 2D dam break against a wall with pressure probes on it (their interval sums and clocks are state) and a
 // connected gauge, stopped between two of the probes' samples as the front runs up the wall.
-Scene dam_probe_scene() {
+Scene dam_probe_scene(const std::vector<Override>& overrides = {}) {
   return parse_scene_text(R"({"name": "dam_probe", "dimension": 2,
     "domain": {"lo": [-0.05, -0.05], "hi": [0.65, 0.4], "walls": "slip"},
     "solver": {"dx": 0.01, "ppc": 4, "precision": "float", "end_time": 0.3},
@@ -156,9 +156,13 @@ Scene dam_probe_scene() {
     "instruments": {"gauges": [{"name": "G1w", "position": [0.5], "reading": "connected"}],
       "pressure_probes": [{"name": "PS1", "position": [0.6, 0.01], "normal": [-1, 0], "rate_hz": 300},
                           {"name": "PS2", "position": [0.5, 0.0], "normal": [0, 1]}]}})",
-                                       "dam_probe.json");
+                                       "dam_probe.json", overrides);
 }
 TEST(Checkpoint, ResumedPressureProbesRepeatTheUninterruptedRun) { expect_exact_resume(dam_probe_scene(), 0.2); }
+// SPH's state: the particles in their last cell order, their sub-particle stress, the walls' densities.
+TEST(Checkpoint, SphResumedPressureProbesRepeatTheUninterruptedRun) {
+  expect_exact_resume(dam_probe_scene({parse_override("solver.method=sph"), parse_override("solver.dx=0.02")}), 0.2);
+}
 #ifdef FLUME_CUDA_EMULATION_AVAILABLE
 // The CUDA backend reads its instruments from host mirrors of the particles (solver/cuda/mpm_cuda.cu).
 TEST(Checkpoint, CudaEmulationResumedPressureProbesRepeatTheUninterruptedRun) {
@@ -171,6 +175,14 @@ TEST(Checkpoint, ResumedBasinRepeatsTheUninterruptedRun) {
   const Scene scene =
       load_scene(waseda("waseda_2d.json"), {parse_override("solver.dx=0.04"), parse_override("solver.end_time=1.2")});
   expect_exact_resume(scene, 0.55);
+}
+
+// SPH on the same basin in double (the wall particles' densities and the vacuum's hold are state as well).
+TEST(Checkpoint, SphResumedBasinRepeatsTheUninterruptedRun) {
+  const Scene scene =
+      load_scene(waseda("waseda_2d.json"), {parse_override("solver.dx=0.04"), parse_override("solver.end_time=0.8"),
+                                            parse_override("solver.method=sph"), parse_override("solver.precision=double")});
+  expect_exact_resume(scene, 0.5);
 }
 
 #ifdef FLUME_CUDA_EMULATION_AVAILABLE
