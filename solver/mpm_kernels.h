@@ -1,5 +1,5 @@
 // The MPM physics, written once as small inline functions that both backends call: the OpenMP loops in
-// mpm_solver.cpp and the CUDA kernels in cuda/. Nothing here allocates, branches on the backend or knows
+// solver/mpm/cpu_*.cpp and the CUDA kernels in cuda/. Nothing here allocates, branches on the backend or knows
 // about the grid's storage. Quadratic B-splines and MLS-MPM transfers follow Hu et al. (2018), "A moving
 // least squares material point method", eqs. 16-29; the fluid is the weakly compressible Tait/Murnaghan
 // water of the comparative study (Bonus et al., section 4.1) with a Newtonian viscous stress.

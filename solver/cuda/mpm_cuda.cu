@@ -1,4 +1,4 @@
-// The CUDA backend of the MLS-MPM solver: the same step as the CPU backend (solver/mpm_solver.cpp), with the
+// The CUDA backend of the MLS-MPM solver: the same step as the CPU backend (solver/mpm/cpu_solver.h), with the
 // physics taken from the same inline functions (solver/mpm_kernels.h, solver/mpm/*_k.h: one particle's P2G
 // terms and G2P update, one node against the boundaries, block keys), launched by mpm::parallel_for
 // (solver/mpm/launch.h), on device arrays. This file holds the stencil loops with their atomics, the launches
@@ -404,7 +404,7 @@ struct GridUpdate {
   }
 };
 
-// Ghost nodes exchange tangential momentum with their reflection (mpm::ghost_exchange; MpmSolver::reflect_ghosts),
+// Ghost nodes exchange tangential momentum with their reflection (mpm::ghost_exchange; GhostReflection::reflect on the CPU),
 // once every node is updated, in two passes: each ghost computes the exchange from the velocities the update
 // left, applies its own change and keeps its mirror's (mirrors are free nodes, so the first pass reads no node it
 // writes); then the mirrors' changes are added, atomically where a mirror is shared.
@@ -1145,7 +1145,7 @@ class MpmCuda final : public Simulation {
   // The nodes in the boxes' bands with the velocities the update gave them, before the ghosts change any.
   void find_coupling_nodes(const V& s) {
     node_body_.resize(s.nodes);
-    const CouplingFind<D, T> f{s, boxes(), coupling_band_ * dx_, raw(node_body_)};
+    const CouplingFind<D, T> f{s, boxes(), mpm::kCouplingBandCells * dx_, raw(node_body_)};
     mpm::parallel_for(s.nodes, f);
     picked_.resize(s.nodes);
     thr::counting_iterator<int64_t> first(0);
@@ -1322,7 +1322,6 @@ class MpmCuda final : public Simulation {
   mpm::Container<D, T> container_;  // the domain box
   bool has_loads_ = false;
   // debris (the boxes on the host; their views, each box's band and the particles it pushed out on the device)
-  static constexpr double coupling_band_ = 1.0;  // cells: as MpmSolver::coupling_band_
   std::unique_ptr<DebrisCoupling> debris_;
   thr::device_vector<RigidBoxView> box_views_;
   thr::device_vector<double> box_radius_, push_share_;

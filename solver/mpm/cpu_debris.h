@@ -53,7 +53,7 @@ class CpuDebris {
                 const TaitLaw<double>& law_d, const T* strain_slope, std::vector<CouplingNode>* nodes) const {
     CouplingNode c;
     const auto& views = bodies_.views();
-    if (!coupling_node<D, T>(views.data(), bodies_.bounding_radii().data(), int(views.size()), xn, kBand * dx,
+    if (!coupling_node<D, T>(views.data(), bodies_.bounding_radii().data(), int(views.size()), xn, kCouplingBandCells * dx,
                              idx, m, e_node, v, law_d, strain_slope, c))
       return false;
     nodes->push_back(c);
@@ -143,12 +143,6 @@ class CpuDebris {
   }
 
  private:
-  // Nodes up to one cell outside a box are its moving-wall nodes: then a water particle touching the box puts
-  // (nearly) all its weight on them (quadratic B-splines reach 1.5 cells; nodes 1-1.5 cells away carry at
-  // most 1/8), so the box feels the water's full pressure. With only the nodes inside the box it would feel
-  // the share of the face's position between nodes, 1/2 on average (docs/solver.md, "Measurements behind the
-  // constants"; tests/solver/test_debris.cpp).
-  static constexpr double kBand = 1.0;  // cells
   DebrisCoupling bodies_;
   std::vector<std::vector<CouplingNode>> coupling_;  // per thread: the nodes found in boxes this step
   std::vector<double> push_out_;  // per particle block and box: impulse and moment of pushed-out particles

@@ -23,6 +23,13 @@ struct CouplingNode {
 
 namespace mpm {
 
+// Nodes up to one cell outside a box are its moving-wall nodes: then a water particle touching the box puts
+// (nearly) all its weight on them (quadratic B-splines reach 1.5 cells; nodes 1-1.5 cells away carry at most
+// 1/8), so the box feels the water's full pressure. With only the nodes inside the box it would feel the share
+// of the face's position between nodes, 1/2 on average (docs/solver.md, "Measurements behind the constants";
+// tests/solver/test_debris.cpp).
+constexpr double kCouplingBandCells = 1.0;
+
 // The box holding point x, the deepest when several do (signed distance <= tol), or -1; writes its outward
 // normal at x. `radius` holds each box's bounding radius.
 FLUME_HD int locate_box(const RigidBoxView* views, const double* radius, int nbodies, const double x[3], double tol,
