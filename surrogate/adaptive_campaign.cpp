@@ -82,7 +82,15 @@ AdaptiveCampaignOutcome run_adaptive_campaign(const AdaptiveCampaignOptions& o) 
       std::printf(", P(%s > %g) = %.4f, interval width %.4f", o.metric.c_str(), o.adapt.threshold, out.p, out.width);
     std::printf("\n");
     std::fflush(stdout);
-    out.reached = (o.target_q2 > 0 && out.q2 >= o.target_q2) || (o.target_width > 0 && out.width <= o.target_width);
+    // A width is evidence only once runs lie on both sides of the threshold: with every run on one side the
+    // kriging's realisations can all stay there, and the interval reads zero wide however little is known.
+    bool above = false, below = false;
+    for (const double y : data.y) (y > o.adapt.threshold ? above : below) = true;
+    const bool width_counts = o.target_width > 0 && above && below;
+    if (o.target_width > 0 && !width_counts)
+      std::printf("adapt: every run so far is %s %g: the interval's width is not yet evidence, going on\n",
+                  above ? "above" : "at or below", o.adapt.threshold);
+    out.reached = (o.target_q2 > 0 && out.q2 >= o.target_q2) || (width_counts && out.width <= o.target_width);
     if (out.reached || out.runs >= o.max_runs) return out;
     AdaptiveSettings a = o.adapt;
     a.batch = std::min(a.batch, o.max_runs - out.runs);

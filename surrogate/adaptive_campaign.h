@@ -17,7 +17,7 @@ struct AdaptiveCampaignOptions {
   AdaptiveSettings adapt;
   std::size_t max_runs = 100;
   double target_q2 = 0;     // 0: none
-  double target_width = 0;  // of the exceedance interval at adapt.threshold; 0: none
+  double target_width = 0;  // of the exceedance interval at adapt.threshold, once runs lie on both sides; 0: none
   std::size_t folds = 5;
   int workers = 1;
 };

@@ -116,6 +116,35 @@ double exact_exceedance(double t) {
   return sum / n;
 }
 
+// A threshold in the tail, beyond every run of the first design: the kriging's realisations all stay below it
+// and the interval reads zero wide, which is no evidence. `adapt` goes on adding runs until one lies above the
+// threshold or the budget is spent (the demo's first threshold, outside its runs, stopped it after the design).
+TEST(Adaptive, WidthTargetWaitsForRunsOnBothSidesOfTheThreshold) {
+  const fs::path dir = test_dir();
+  {
+    std::ofstream(dir / "spec.json") << R"({"name": "adapt-tail", "model": "ishigami", "overrides": {"x3": 0},
+      "parameters": [
+        {"path": "x1", "distribution": {"type": "uniform", "lower": -3.141592653589793, "upper": 3.141592653589793}},
+        {"path": "x2", "distribution": {"type": "uniform", "lower": -3.141592653589793, "upper": 3.141592653589793}}],
+      "design": {"type": "lhs", "samples": 4}, "seed": 3})";
+  }
+  const std::string db = (dir / "s.db").string();
+  const double t = 7.5;  // y = sin x1 + 7 sin^2 x2 <= 8: P(y > 7.5) is about 0.06
+  auto r = flume::test::run_command({FLUME_EXE, "surrogate", "adapt", (dir / "spec.json").string(), "--db", db,
+                                     "--metric", "y", "--threshold", "7.5", "--target-width", "0.5", "--batch", "2",
+                                     "--max-runs", "30", "--folds", "0", "--workers", "2"},
+                                    dir, 110);
+  ASSERT_EQ(r.rc, 0) << r.err << r.out;
+  const TrainingData data = load_training_data(db, "adapt-tail", "y");
+  ASSERT_GE(data.y.size(), 4u);
+  for (std::size_t i = 0; i < 4; ++i) ASSERT_LE(data.y[i], t) << "the design must lie below t for this test";
+  EXPECT_GT(data.y.size(), 4u) << r.out;
+  std::size_t above = 0;
+  for (const double y : data.y) above += y > t;
+  EXPECT_TRUE(above > 0 || data.y.size() == 30u) << "stopped with every run below t: " << r.out;
+  EXPECT_NE(r.out.find("not yet evidence"), std::string::npos) << r.out;
+}
+
 // The demo's path end to end (scripts/demo): `adapt` by the exceedance criterion (AK-MCS U) at t = 5, then
 // `fit --thresholds`, then the report. The added runs gather near the contour y = t; the exact probability
 // lies in the kriging's interval, widened by 3 binomial standard deviations of the one sample of input points
