@@ -221,13 +221,15 @@ TEST(Multilevel, VarianceFormulaMatchesRepetitionsAndTheMeanIsUnbiased) {
 }
 
 // From the store: a low campaign of 400 Monte Carlo points and a high one whose 40 points are the first 40 of
-// the same seeded sequence (so they pair); the interval holds the exact mean.
+// the same seeded sequence (so they pair; two parameters, as a design drawn parameter by parameter shares only
+// the first one's values); the interval holds the exact mean.
 TEST(Multilevel, PairsTwoCampaignsOfAStore) {
   const fs::path dir = test_dir();
   const std::string db = (dir / "s.db").string();
   auto spec = [](const std::string& name, int n) {
     return R"({"name": ")" + name + R"(", "model": "ishigami", "parameters": [{"path": "x1", "distribution":
-      {"type": "uniform", "lower": 0, "upper": 1}}], "design": {"type": "monte_carlo", "samples": )" +
+      {"type": "uniform", "lower": 0, "upper": 1}}, {"path": "x2", "distribution": {"type": "uniform", "lower": 0,
+      "upper": 1}}], "design": {"type": "monte_carlo", "samples": )" +
            std::to_string(n) + R"(}, "seed": 7})";
   };
   flume::test::make_campaign(db, spec("low", 400), [](const std::vector<double>& x, std::int64_t) {
