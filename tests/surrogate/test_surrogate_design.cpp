@@ -248,6 +248,13 @@ TEST(Multilevel, PairsTwoCampaignsOfAStore) {
   EXPECT_GE(e.hi, exact_mean_high());
   EXPECT_DOUBLE_EQ(e.cost_s, 360 * 1.0 + 40 * 11.0);
   EXPECT_NEAR(e.high_only_cost_s, e.v_high * 10.0 / e.variance, 1e-9 * e.high_only_cost_s);
+  // At the optimal allocation the variance for a cost C is (sqrt(V0 c_L) + sqrt(V1 (c_H + c_L)))^2 / C (Giles
+  // 2008, eq. (6)): check the printed ratio against the estimator's own variance at that allocation.
+  const double n1 = 1000, n0 = e.optimal_n0_per_n1 * n1, cost = n0 * 1.0 + n1 * 11.0;
+  const double var_opt = e.v0 / n0 + e.v1 / n1;
+  EXPECT_NEAR(e.optimal_cost_ratio, e.v_high * 10.0 / var_opt / cost, 1e-9 * e.optimal_cost_ratio);
+  EXPECT_GT(e.correlation, 0.0);
+  EXPECT_LE(e.correlation, 1.0);
   EXPECT_THROW(load_two_levels(db, "low", "low_missing", "y"), flume::InputError);
 }
 
