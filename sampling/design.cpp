@@ -63,7 +63,17 @@ OT::Sample base_experiment(DesignType type, size_t dim, size_t n) {
       e.setRandomize(true);  // a random shift (Cranley-Patterson) per seed keeps the estimate unbiased
       return e.generate();
     }
-    default: return OT::MonteCarloExperiment(unit_cube(dim), n).generate();
+    default: {
+      // Point by point: OpenTURNS' MonteCarloExperiment draws an independent law's marginals one after the
+      // other (all n values of the first, then of the second...), so a design of fewer samples would share only
+      // its first parameter's values with a larger one of the same seed. Drawn this way the first k points of
+      // an n-point design are the k-point design, which is how two campaigns share points (the two-level
+      // estimator of docs/surrogates.md pairs them).
+      OT::Sample s(n, dim);
+      for (size_t i = 0; i < n; ++i)
+        for (size_t j = 0; j < dim; ++j) s(i, j) = OT::RandomGenerator::Generate();
+      return s;
+    }
   }
 }
 

@@ -282,12 +282,15 @@ int multilevel(const Args& a) {
               a.metrics.front().c_str(), e.mean, 100 * a.settings.confidence, e.lo, e.hi, std::sqrt(e.variance));
   std::printf("runs: %zu low only, %zu pairs; cost per run %.4g s low, %.4g s high; spent %.4g s\n", e.n0, e.n1,
               samples.cost_low_s, samples.cost_high_s, e.cost_s);
-  std::printf("variances: low %.4g, correction %.4g, high %.4g\n", e.v0, e.v1, e.v_high);
+  std::printf("variances: low %.4g, correction %.4g, high %.4g; correlation of the levels over the pairs %.4f\n", e.v0,
+              e.v1, e.v_high, e.correlation);
   std::printf("high runs alone at the same cost: std %.4g (%.2f times the two-level std); for the same std they "
               "would cost %.4g s (%.2f times)\n",
               std::sqrt(e.high_only_variance), std::sqrt(e.high_only_variance / e.variance), e.high_only_cost_s,
               e.high_only_cost_s / e.cost_s);
-  std::printf("optimal allocation: %.3g low-only runs per pair\n", e.optimal_n0_per_n1);
+  std::printf("optimal allocation: %.3g low-only runs per pair; with it high runs alone would cost %.2f times the "
+              "two levels for the same std\n",
+              e.optimal_n0_per_n1, e.optimal_cost_ratio);
   return kExitOk;
 }
 

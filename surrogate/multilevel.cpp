@@ -36,6 +36,11 @@ TwoLevelEstimate two_level_estimate(const TwoLevelSamples& s, double confidence)
   e.high_only_variance = e.v_high * s.cost_high_s / e.cost_s;
   e.high_only_cost_s = e.v_high * s.cost_high_s / e.variance;
   e.optimal_n0_per_n1 = std::sqrt(e.v0 / s.cost_low_s) / std::sqrt(e.v1 / (s.cost_high_s + s.cost_low_s));
+  e.optimal_cost_ratio = e.v_high * s.cost_high_s /
+                         std::pow(std::sqrt(e.v0 * s.cost_low_s) + std::sqrt(e.v1 * (s.cost_high_s + s.cost_low_s)), 2);
+  OT::Sample pairs(e.n1, 2);
+  for (std::size_t i = 0; i < e.n1; ++i) pairs(i, 0) = s.pair_low[i], pairs(i, 1) = s.pair_high[i];
+  e.correlation = pairs.computePearsonCorrelation()(0, 1);
   return e;
 }
 

@@ -29,6 +29,9 @@ struct TwoLevelEstimate {
   double high_only_variance = 0;                   // of high runs alone at the same cost
   double high_only_cost_s = 0;                     // high runs alone for the same variance
   double optimal_n0_per_n1 = 0;                    // sqrt(V0 / c_L) / sqrt(V1 / (c_H + c_L))
+  double optimal_cost_ratio = 0;  // high alone over two levels for one variance, at that allocation (eq. (6)):
+                                  // V_H c_H / (sqrt(V0 c_L) + sqrt(V1 (c_H + c_L)))^2
+  double correlation = 0;         // of Y_L and Y_H over the pairs
 };
 
 // Throws std::invalid_argument with fewer than 2 values in either term or non-positive costs.

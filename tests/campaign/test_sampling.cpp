@@ -88,6 +88,18 @@ TEST(Sobol, LowerCentredL2DiscrepancyThanMonteCarloAt256Points) {
   }
 }
 
+// Two campaigns share points when one is a Monte Carlo design of the same seed with fewer samples: its points
+// are the larger design's first ones, every parameter (not only the first), with a rank correlation too.
+TEST(MonteCarlo, FewerSamplesOfTheSameSeedAreTheFirstPoints) {
+  const auto params = mixed_parameters();
+  for (const std::vector<RankCorrelation>& corr : {std::vector<RankCorrelation>{}, {{0, 2, 0.6}}}) {
+    const Design big = generate_design(params, corr, spec(DesignType::kMonteCarlo, 120), 31);
+    const Design small = generate_design(params, corr, spec(DesignType::kMonteCarlo, 12), 31);
+    ASSERT_EQ(small.values.size(), 12u);
+    for (size_t i = 0; i < small.values.size(); ++i) EXPECT_EQ(small.values[i], big.values[i]) << "point " << i;
+  }
+}
+
 TEST(Designs, SameSeedSameDesignOtherSeedOtherDesign) {
   const auto params = mixed_parameters();
   for (DesignType t : {DesignType::kMonteCarlo, DesignType::kLatinHypercube, DesignType::kSobol, DesignType::kSaltelli}) {

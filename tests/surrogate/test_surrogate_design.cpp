@@ -250,13 +250,15 @@ TEST(Multilevel, VarianceFormulaMatchesRepetitionsAndTheMeanIsUnbiased) {
 }
 
 // From the store: a low campaign of 400 Monte Carlo points and a high one whose 40 points are the first 40 of
-// the same seeded sequence (so they pair); the interval holds the exact mean.
+// the same seeded sequence (so they pair; two parameters, as a design drawn parameter by parameter shares only
+// the first one's values); the interval holds the exact mean.
 TEST(Multilevel, PairsTwoCampaignsOfAStore) {
   const fs::path dir = test_dir();
   const std::string db = (dir / "s.db").string();
   auto spec = [](const std::string& name, int n) {
     return R"({"name": ")" + name + R"(", "model": "ishigami", "parameters": [{"path": "x1", "distribution":
-      {"type": "uniform", "lower": 0, "upper": 1}}], "design": {"type": "monte_carlo", "samples": )" +
+      {"type": "uniform", "lower": 0, "upper": 1}}, {"path": "x2", "distribution": {"type": "uniform", "lower": 0,
+      "upper": 1}}], "design": {"type": "monte_carlo", "samples": )" +
            std::to_string(n) + R"(}, "seed": 7})";
   };
   flume::test::make_campaign(db, spec("low", 400), [](const std::vector<double>& x, std::int64_t) {
@@ -275,6 +277,13 @@ TEST(Multilevel, PairsTwoCampaignsOfAStore) {
   EXPECT_GE(e.hi, exact_mean_high());
   EXPECT_DOUBLE_EQ(e.cost_s, 360 * 1.0 + 40 * 11.0);
   EXPECT_NEAR(e.high_only_cost_s, e.v_high * 10.0 / e.variance, 1e-9 * e.high_only_cost_s);
+  // At the optimal allocation the variance for a cost C is (sqrt(V0 c_L) + sqrt(V1 (c_H + c_L)))^2 / C (Giles
+  // 2008, eq. (6)): check the printed ratio against the estimator's own variance at that allocation.
+  const double n1 = 1000, n0 = e.optimal_n0_per_n1 * n1, cost = n0 * 1.0 + n1 * 11.0;
+  const double var_opt = e.v0 / n0 + e.v1 / n1;
+  EXPECT_NEAR(e.optimal_cost_ratio, e.v_high * 10.0 / var_opt / cost, 1e-9 * e.optimal_cost_ratio);
+  EXPECT_GT(e.correlation, 0.0);
+  EXPECT_LE(e.correlation, 1.0);
   EXPECT_THROW(load_two_levels(db, "low", "low_missing", "y"), flume::InputError);
 }
 
