@@ -116,18 +116,21 @@ double exact_exceedance(double t) {
   return sum / n;
 }
 
+// A campaign of the Ishigami function over x1 and x2 (x3 = 0: y = sin x1 + 7 sin^2 x2), an LHS of `samples`.
+void write_ishigami_x1x2_spec(const fs::path& file, const std::string& name, int samples) {
+  std::ofstream(file) << R"({"name": ")" << name << R"(", "model": "ishigami", "overrides": {"x3": 0},
+      "parameters": [
+        {"path": "x1", "distribution": {"type": "uniform", "lower": -3.141592653589793, "upper": 3.141592653589793}},
+        {"path": "x2", "distribution": {"type": "uniform", "lower": -3.141592653589793, "upper": 3.141592653589793}}],
+      "design": {"type": "lhs", "samples": )" << samples << R"(}, "seed": 3})";
+}
+
 // A threshold in the tail, beyond every run of the first design: the kriging's realisations all stay below it
 // and the interval reads zero wide, which is no evidence. `adapt` goes on adding runs until one lies above the
 // threshold or the budget is spent (the demo's first threshold, outside its runs, stopped it after the design).
 TEST(Adaptive, WidthTargetWaitsForRunsOnBothSidesOfTheThreshold) {
   const fs::path dir = test_dir();
-  {
-    std::ofstream(dir / "spec.json") << R"({"name": "adapt-tail", "model": "ishigami", "overrides": {"x3": 0},
-      "parameters": [
-        {"path": "x1", "distribution": {"type": "uniform", "lower": -3.141592653589793, "upper": 3.141592653589793}},
-        {"path": "x2", "distribution": {"type": "uniform", "lower": -3.141592653589793, "upper": 3.141592653589793}}],
-      "design": {"type": "lhs", "samples": 4}, "seed": 3})";
-  }
+  write_ishigami_x1x2_spec(dir / "spec.json", "adapt-tail", 4);
   const std::string db = (dir / "s.db").string();
   const double t = 7.5;  // y = sin x1 + 7 sin^2 x2 <= 8: P(y > 7.5) is about 0.06
   auto r = flume::test::run_command({FLUME_EXE, "surrogate", "adapt", (dir / "spec.json").string(), "--db", db,
@@ -152,13 +155,7 @@ TEST(Adaptive, WidthTargetWaitsForRunsOnBothSidesOfTheThreshold) {
 // statistics rest on the LHS runs only and its surrogate section tabulates P with the interval's source.
 TEST(Adaptive, ExceedanceCampaignGathersRunsNearTheThresholdAndTheReportShowsP) {
   const fs::path dir = test_dir();
-  {
-    std::ofstream(dir / "spec.json") << R"({"name": "adapt-t", "model": "ishigami", "overrides": {"x3": 0},
-      "parameters": [
-        {"path": "x1", "distribution": {"type": "uniform", "lower": -3.141592653589793, "upper": 3.141592653589793}},
-        {"path": "x2", "distribution": {"type": "uniform", "lower": -3.141592653589793, "upper": 3.141592653589793}}],
-      "design": {"type": "lhs", "samples": 15}, "seed": 3})";
-  }
+  write_ishigami_x1x2_spec(dir / "spec.json", "adapt-t", 15);
   const std::string db = (dir / "s.db").string();
   auto r = flume::test::run_command({FLUME_EXE, "surrogate", "adapt", (dir / "spec.json").string(), "--db", db,
                                      "--metric", "y", "--threshold", "5", "--target-width", "0.02", "--batch", "5",
