@@ -398,7 +398,9 @@ TEST(CampaignExport, CsvHasOneRowPerRunWithParametersAndMetrics) {
 // Issue 29: two `campaign run` jobs on one database, one through the path the other used and one through a
 // link to the same file (symlink or hard link), started together `trials` times. Each time one job runs the
 // campaign and the other is refused in one line naming the database it was given and the holder's pid, having
-// written nothing: no run is executed twice, no run folder is made beside the link.
+// written nothing: no run is executed twice, no run folder is made beside the link. On a loaded machine the
+// second job may start after the first has ended; it must then find nothing to run, and at most a quarter of
+// the trials may go so (they do not test the lock).
 void two_writers_through_a_link(bool hard_link, int trials) {
   const fs::path dir = test_dir();
   const fs::path db = dir / "study.db", link = dir / "alias.db";
@@ -409,6 +411,7 @@ void two_writers_through_a_link(bool hard_link, int trials) {
   else
     fs::create_symlink(db, link);
   const fs::path paths[2] = {db, link};
+  int serialised = 0;  // trials whose jobs did not overlap
   for (int k = 0; k < trials; ++k) {
     const std::string name = "trial-" + std::to_string(k);
     const fs::path spec = dir / (name + ".json");
@@ -421,6 +424,15 @@ void two_writers_through_a_link(bool hard_link, int trials) {
       ASSERT_GT(pid[w], 0);
     }
     const int rc[2] = {wait_for(pid[0], 60), wait_for(pid[1], 60)};
+    const std::string runs_of_trial = "SELECT count(*) FROM runs r JOIN campaigns c ON c.id = r.campaign WHERE c.name = '" +
+                                      name + "' AND r.status = 'ok' AND r.attempts = 1";
+    if (rc[0] == 0 && rc[1] == 0) {  // the jobs did not overlap (a loaded machine started one after the other ended)
+      ++serialised;
+      const std::string outs = read_file(dir / "out0") + read_file(dir / "out1");
+      EXPECT_NE(outs.find("0 to run"), std::string::npos) << "trial " << k << ": both jobs ran runs: " << outs;
+      EXPECT_EQ(scalar(db, runs_of_trial), "2") << "trial " << k << ": a run was executed twice or not at all";
+      continue;
+    }
     ASSERT_TRUE((rc[0] == 0 && rc[1] == 2) || (rc[0] == 2 && rc[1] == 0))
         << "trial " << k << ": exit codes " << rc[0] << " and " << rc[1] << "; stderr: "
         << read_file(dir / "err0") << " | " << read_file(dir / "err1");
@@ -432,11 +444,9 @@ void two_writers_through_a_link(bool hard_link, int trials) {
     EXPECT_TRUE(read_file(dir / ("out" + std::to_string(loser))).empty());
     EXPECT_FALSE(fs::exists(paths[loser].string() + ".runs/" + name)) << "the refused job made its run folder";
     EXPECT_EQ(scalar(db, "SELECT count(*) FROM campaigns WHERE name = '" + name + "'"), "1");
-    EXPECT_EQ(scalar(db, "SELECT count(*) FROM runs r JOIN campaigns c ON c.id = r.campaign WHERE c.name = '" + name +
-                             "' AND r.status = 'ok' AND r.attempts = 1"),
-              "2")
-        << "trial " << k << ": a run was executed twice or not at all";
+    EXPECT_EQ(scalar(db, runs_of_trial), "2") << "trial " << k << ": a run was executed twice or not at all";
   }
+  EXPECT_LE(serialised, trials / 4) << "too few trials ran the two jobs side by side to test the lock";
   EXPECT_EQ(scalar(db, "SELECT count(*) FROM runs WHERE attempts != 1 OR status != 'ok'"), "0");
   EXPECT_EQ(scalar(db, "PRAGMA integrity_check"), "ok");
 }
