@@ -14,7 +14,7 @@
 
 #include "common/errors.h"
 #include "surrogate/adaptive_campaign.h"
-#include "surrogate/multilevel.h"
+#include "surrogate/multilevel_command.h"
 #include "surrogate/ot_models.h"
 #include "surrogate/posterior.h"
 #include "surrogate/stored.h"
@@ -36,8 +36,12 @@ const char* kUsage =
     "  flume surrogate adapt SPEC.json --db FILE --metric M [--batch B] [--max-runs N] [--target-q2 Q]\n"
     "        [--threshold T [--target-width W]] [--candidates C] [--folds K] [--workers N] [--seed S]\n"
     "        grow the campaign a batch at a time where the kriging is least sure\n"
+    "  flume surrogate multilevel --db FILE --levels HIGH,MID,...,LOW --metric M[,M2...] [--cost S1,S2,...]\n"
     "  flume surrogate multilevel --db FILE --low NAME --high NAME --metric M [--cost-low S --cost-high S]\n"
-    "        two-level Monte Carlo mean of a high-fidelity metric, against high runs alone at the same cost\n"
+    "        mean of the highest-fidelity metric from nested campaigns (levels high to low fidelity; costs per\n"
+    "        run, default the mean wall times): multi-fidelity Monte Carlo (Peherstorfer et al. 2016) with the\n"
+    "        optimal weights and with unit weights, two levels also by Giles' two-level Monte Carlo; each against\n"
+    "        high runs alone for the same variance, and the optimal allocation\n"
     "  flume surrogate posterior --db FILE --calibration NAME --noise-m SIGMA [--samples N] [--seed S]\n"
     "        posterior of a calibration's parameters by MCMC on a kriging surrogate of its misfit\n";
 
@@ -52,6 +56,8 @@ struct Args {
   bool has_threshold = false;
   std::string low, high;
   double cost_low = 0, cost_high = 0;
+  std::vector<std::string> levels;
+  std::vector<double> costs;
   std::string calibration;
   surrogate::PosteriorSettings posterior;
   bool has_noise = false;
@@ -152,6 +158,11 @@ Args parse_args(int argc, char** argv) {
       a.cost_low = parse_number(s, value(), 1e-9, 1e9);
     } else if (s == "--cost-high") {
       a.cost_high = parse_number(s, value(), 1e-9, 1e9);
+    } else if (s == "--levels") {
+      a.levels = split(value(), ',');
+      if (a.levels.size() < 2) throw InputError("command line", s, "needs at least 2 campaigns, high fidelity first");
+    } else if (s == "--cost") {
+      for (const auto& t : split(value(), ',')) a.costs.push_back(parse_number(s, t, 1e-9, 1e9));
     } else if (!s.empty() && s[0] != '-') {
       a.positional.push_back(s);
     } else {
@@ -275,22 +286,21 @@ int adapt(Args a) {
 }
 
 int multilevel(const Args& a) {
-  if (a.low.empty() || a.high.empty()) throw InputError("command line", "--low", "and --high campaigns are required");
-  const auto samples = surrogate::load_two_levels(a.db, a.low, a.high, a.metrics.front(), a.cost_low, a.cost_high);
-  const auto e = surrogate::two_level_estimate(samples, a.settings.confidence);
-  std::printf("two-level Monte Carlo (Giles 2008) of E[%s]: %.6g, %.0f %% interval [%.6g, %.6g], std %.4g\n",
-              a.metrics.front().c_str(), e.mean, 100 * a.settings.confidence, e.lo, e.hi, std::sqrt(e.variance));
-  std::printf("runs: %zu low only, %zu pairs; cost per run %.4g s low, %.4g s high; spent %.4g s\n", e.n0, e.n1,
-              samples.cost_low_s, samples.cost_high_s, e.cost_s);
-  std::printf("variances: low %.4g, correction %.4g, high %.4g; correlation of the levels over the pairs %.4f\n", e.v0,
-              e.v1, e.v_high, e.correlation);
-  std::printf("high runs alone at the same cost: std %.4g (%.2f times the two-level std); for the same std they "
-              "would cost %.4g s (%.2f times)\n",
-              std::sqrt(e.high_only_variance), std::sqrt(e.high_only_variance / e.variance), e.high_only_cost_s,
-              e.high_only_cost_s / e.cost_s);
-  std::printf("optimal allocation: %.3g low-only runs per pair; with it high runs alone would cost %.2f times the "
-              "two levels for the same std\n",
-              e.optimal_n0_per_n1, e.optimal_cost_ratio);
+  std::vector<std::string> levels = a.levels;
+  std::vector<double> costs = a.costs;
+  if (!levels.empty() && (!a.low.empty() || !a.high.empty()))
+    throw InputError("command line", "--levels", "give either --levels or --low and --high, not both");
+  if (levels.empty()) {
+    if (a.low.empty() || a.high.empty()) throw InputError("command line", "--levels", "(or --low and --high) is required");
+    if (!costs.empty()) throw InputError("command line", "--cost", "goes with --levels; with --low/--high give --cost-low/--cost-high");
+    levels = {a.high, a.low};
+    costs = {a.cost_high, a.cost_low};
+  } else if (a.cost_low > 0 || a.cost_high > 0) {
+    throw InputError("command line", "--cost-low", "goes with --low/--high; with --levels give --cost S1,S2,...");
+  }
+  if (!costs.empty() && costs.size() != levels.size())
+    throw InputError("command line", "--cost", "needs one cost per level (" + std::to_string(levels.size()) + ")");
+  for (const auto& m : a.metrics) surrogate::print_multilevel(a.db, levels, costs, m, a.settings.confidence);
   return kExitOk;
 }
 
