@@ -13,6 +13,11 @@ void print_giles(const std::string& db_file, const std::vector<std::string>& lev
                  const std::string& metric, double confidence) {
   const auto samples = load_two_levels(db_file, levels[1], levels[0], metric, costs.empty() ? 0 : costs[1],
                                        costs.empty() ? 0 : costs[0]);
+  if (samples.low_only.size() < 2) {  // its first term is over the low runs without a pair
+    std::printf("two-level Monte Carlo (Giles 2008) of E[%s]: not defined, %zu low-only run(s) (needs 2)\n",
+                metric.c_str(), samples.low_only.size());
+    return;
+  }
   const auto e = two_level_estimate(samples, confidence);
   std::printf("two-level Monte Carlo (Giles 2008) of E[%s]: %.6g, %.0f %% interval [%.6g, %.6g], std %.4g\n",
               metric.c_str(), e.mean, 100 * confidence, e.lo, e.hi, std::sqrt(e.variance));

@@ -305,6 +305,11 @@ TEST(Mfmc, NestsCampaignsOfAStoreAndTheCommandPrintsBoth) {
   ASSERT_EQ(r.rc, 0) << r.err;
   EXPECT_NE(r.out.find("two-level Monte Carlo (Giles 2008)"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("MFMC, optimal weights"), std::string::npos) << r.out;
+  // Equal sizes: no low-only run for Giles' first term (said), the MFMC correction is zero.
+  level("mid12", 12, y2);
+  r = flume({"surrogate", "multilevel", "--db", db, "--levels", "top,mid12", "--metric", "y", "--cost", "1,0.1"});
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_NE(r.out.find("not defined, 0 low-only run(s)"), std::string::npos) << r.out;
   r = flume({"surrogate", "multilevel", "--db", db, "--levels", "top,mid", "--metric", "y", "--cost", "1"});
   EXPECT_NE(r.rc, 0);
   EXPECT_NE(r.err.find("--cost"), std::string::npos) << r.err;
