@@ -185,6 +185,21 @@ class SphSolver final : public Simulation {
     energy_slack_ = std::max(energy_slack_, 0.01 * e.kinetic);
   }
 
+  // The fluid particles' state carried from step to step, in the checkpoint's order: what the checkpoint stores
+  // and the block sort permutes. `optional`: empty unless the scene holds a reservoir.
+  template <typename F>
+  void for_each_particle_array(F&& f) {
+    for (int d = 0; d < D; ++d) {
+      f(x_[d], false);
+      f(v_[d], false);
+    }
+    f(rho_, false);
+    f(mass_, false);
+    f(vol_, false);
+    f(held_, true);
+    for (auto& t : tau_) f(t, false);
+  }
+
   // Everything a step reads that an earlier step wrote: the fluid particles in their last cell order (the
   // step's sort is stable, so the order it starts from decides the order it ends in, and with it every sum's),
   // their sub-particle stress, the walls' densities, the clock, the energy audit and the instruments. The cell
@@ -192,15 +207,7 @@ class SphSolver final : public Simulation {
   // one to the bit.
   void checkpoint(StateArchive& ar) override {
     ar.section(std::string("sph ") + std::to_string(D) + "D " + (sizeof(T) == 4 ? "float" : "double"));
-    for (int d = 0; d < D; ++d) {
-      ar(x_[d]);
-      ar(v_[d]);
-    }
-    ar(rho_);
-    ar(mass_);
-    ar(vol_);
-    ar(held_);
-    for (auto& t : tau_) ar(t);
+    for_each_particle_array([&](std::vector<T>& a, bool) { ar(a); });
     ar.expect("wall particles", nw_);
     ar(rhow_);
     ar.fields(time_, dt_, max_speed_, steps_, interactions_, energy0_, energy_slack_, last_energy_, mass_total_,
@@ -208,10 +215,10 @@ class SphSolver final : public Simulation {
     instruments_.checkpoint(ar);
     if (!ar.loading()) return;
     const size_t n = x_[0].size();
-    const auto bad = [&](const std::vector<T>& a) { return a.size() != n; };
-    bool mismatch = bad(rho_) || bad(mass_) || bad(vol_) || (!held_.empty() && bad(held_)) || rhow_.size() != nw_;
-    for (int d = 0; d < D; ++d) mismatch = mismatch || bad(x_[d]) || bad(v_[d]);
-    for (auto& t : tau_) mismatch = mismatch || bad(t);
+    bool mismatch = rhow_.size() != nw_;
+    for_each_particle_array([&](std::vector<T>& a, bool optional) {
+      mismatch = mismatch || ((!optional || !a.empty()) && a.size() != n);
+    });
     if (mismatch || n != n_) ar.fail("particles", "particle arrays of another length than the scene seeds");
     if (status_ == RunStatus::kUnstable) ar.fail("status", "the checkpointed run had gone unstable");
     // A finished run resumed to a later end time runs on.
@@ -431,15 +438,9 @@ class SphSolver final : public Simulation {
         sph::parallel_for(n_, [&](size_t i) { scratch_[i] = a[order[i]]; });
         a.swap(scratch_);
       };
-      for (int d = 0; d < D; ++d) {
-        permute(x_[d]);
-        permute(v_[d]);
-      }
-      permute(rho_);
-      permute(mass_);
-      permute(vol_);
-      if (!held_.empty()) permute(held_);
-      for (int k = 0; k < kS; ++k) permute(tau_[k]);
+      for_each_particle_array([&](std::vector<T>& a, bool optional) {
+        if (!optional || !a.empty()) permute(a);
+      });
       std::vector<uint32_t> sorted(n_);
       sph::parallel_for(n_, [&](size_t i) { sorted[i] = cell[order[i]]; });
       cell.swap(sorted);
