@@ -56,14 +56,27 @@ if [[ $mode == flume-bundle ]]; then
   mkdir -p "$stage/bin" "$stage/lib" .gpu-flume
   exclude=$(git rev-parse --git-path info/exclude)
   grep -qx '/.gpu-flume/' "$exclude" 2>/dev/null || echo '/.gpu-flume/' >>"$exclude"
-  cp "$build/bin/flume" "$stage/bin/"
-  strip "$stage/bin/flume"
-  ldd "$stage/bin/flume" | awk '/=> \// {print $3}' |
-    grep -vE '/(libc|libm|libdl|libpthread|librt|libresolv|ld-linux[^/]*|libcuda)\.so' |
+  cp "$build/bin/flume" "$build/bin/test_cuda" "$stage/bin/"
+  strip "$stage/bin/flume" "$stage/bin/test_cuda"
+  ldd "$stage/bin/flume" "$stage/bin/test_cuda" | awk '/=> \// {print $3}' |
+      grep -vE '/(libc|libm|libdl|libpthread|librt|libresolv|ld-linux[^/]*|libcuda)\.so' | sort -u |
     while read -r lib; do cp -L "$lib" "$stage/lib/"; done
   tar -C "$stage" -cf - . | xz -T2 -6 >.gpu-flume/flume.tar.xz
   rm -rf "$stage"
   du -sh .gpu-flume
+  exit 0
+fi
+# The whole device check in one call (the archive holds test_cuda too): the tests and the benchmark with flume
+# named, then the whole runs, each stage under its own limit, the log written to $OUT:
+#   device: run(command="bench/run_gpu_bench.sh device", carry=[".gpu-flume"], timeout_s=560)
+if [[ $mode == device ]]; then
+  fl=$(mktemp -d)
+  tar -C "$fl" -xJf .gpu-flume/flume.tar.xz
+  out=${OUT:-$(mktemp -d)}
+  set +e
+  LD_LIBRARY_PATH=$fl/lib FLUME=$fl/bin/flume TEST_CUDA=$fl/bin/test_cuda timeout "${BENCH_LIMIT:-330}" "$0" all 2>&1 |
+    tee "$out/bench.log"
+  timeout "${RUNS_LIMIT:-200}" "$0" flume-runs 2>&1 | tee "$out/runs.log"
   exit 0
 fi
 if [[ $mode == flume-runs ]]; then
@@ -120,7 +133,7 @@ if [[ $mode == all ]]; then
   filter='Cuda.*:CudaCli.*'
   [[ -n $flume ]] || filter+=':-Cuda.RunWritesResult'
   FLUME_EXE=${flume:-/nonexistent} FLUME_SOURCE_DIR=$root "$test_cuda" --gtest_color=no \
-    --gtest_filter="$filter" | grep -E '^\[|^(cpu|other|column|martin|free|half|tank|box)' || tests_failed=1
+    --gtest_filter="$filter" | grep -E '^\[|^(cpu|other|column|martin|free|half|tank|box|waseda)|Failure|Expected|actual' || tests_failed=1
 fi
 
 # The benchmark scene: bench/scenes/dam_break_3d_1m.json when present (the CPU benchmark's), else the same

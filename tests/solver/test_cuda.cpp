@@ -428,7 +428,27 @@ TEST(Cuda, FallingBox3DDoubleMatchesCpu) {
 }
 TEST(Cuda, WasedaStrip3DDoubleMatchesCpu) {
   SKIP_WITHOUT_DEVICE();
-  expect_within(compare(waseda_strip("double", 2.9), cpu, gpu), double_bounds(0.05, 0.9, 10));
+  expect_within(compare(waseda_strip("double", 0.8), cpu, gpu), double_bounds(0.05, 0.9, 10));
+}
+// Once the bore breaks over the quay and strikes the containers, round-off stops being round-off: a splash or
+// a contact that opens a step earlier moves particles and bodies by a finite amount, and on a GPU the atomics'
+// order changes from run to run, so two GPU runs of the same scene differ as well (docs/benchmarks.md: the
+// containers' rest positions spread by 2 cm over 6 s). A bound on the GPU against the CPU must then come from
+// that chaos itself: the GPU may differ from the CPU by no more than a margin times what it differs from
+// itself (both differences grow from one-ulp seeds at the same rate; 20 allows for the seeds' spread). A wrong
+// term in the exchange moves the containers by a fraction of their motion, orders of magnitude more.
+TEST(Cuda, WasedaStrip3DThroughImpactDiffersFromCpuAsFromItself) {
+  SKIP_WITHOUT_DEVICE();
+  const Scene scene = waseda_strip("double", 2.9);
+  const Difference vs_cpu = compare(scene, cpu, gpu);
+  const Difference vs_gpu = compare(scene, gpu, gpu);
+  const Bounds floor = double_bounds(0.05, 0.9, 10);
+  const double margin = 20;
+  EXPECT_EQ(vs_cpu.steps_a, vs_cpu.steps_b) << "the adaptive steps must agree";
+  EXPECT_LE(vs_cpu.body, margin * std::max(vs_gpu.body, floor.body)) << "debris centres";
+  EXPECT_LE(vs_cpu.position, margin * std::max(vs_gpu.position, floor.position)) << "particle positions";
+  EXPECT_LE(vs_cpu.gauge, margin * std::max(vs_gpu.gauge, floor.gauge)) << "gauges";
+  EXPECT_LE(vs_cpu.energy, margin * std::max(vs_gpu.energy, floor.energy)) << "energy diagnostic";
 }
 TEST(Cuda, InstabilityMatchesCpu) {
   SKIP_WITHOUT_DEVICE();
