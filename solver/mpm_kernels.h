@@ -615,6 +615,87 @@ FLUME_HD void apply_wall(T* v, const double (*n)[D], int faces, const T* vb, Bc 
   }
 }
 
+// A box's surface, resolved below a cell. A node under one face of a box (within a cell of it) is a point of a
+// plane wall: free along it. Under two faces of different axes it is on a convex edge, which water passes along
+// either face (under the gate's lip, over the quay's crest, round a column). But wall_faces holds a node by every
+// face within reach, and with slip walls that stops it: the gate's lip row and its corners became stagnation
+// points that choked the flow under a 0.10 m gate by a fifth at dx 0.02 m (docs/validation.md, section 1). So a
+// node within a cell of faces f takes, for each subset S of them, the share prod_{f in S} s_f prod_{f not in S}
+// (1 - s_f), s_f = 1 - depth_f / dx, of the velocity S alone would give it: none, wall_faces' hold; one face, its
+// projection; two or more, the edge's (apply_convex_edge). Each share falls to 0 as a face moves a cell away, so
+// the velocity changes smoothly as a face moves across the grid (the gate's height is calibrated). An axis with
+// both faces within a cell (a wall thinner than two cells) keeps wall_faces' hold.
+template <int D>
+FLUME_HD int surface_faces(const double* x, const double* lo, const double* hi, double dx, double (*n)[D],
+                           double* s) {
+  int count = 0;
+  for (int a = 0; a < D; ++a) {
+    const double below = (x[a] - lo[a]) / dx, above = (hi[a] - x[a]) / dx;
+    if (below < 1 && above < 1) return 0;
+    const bool low = below <= above;
+    const double depth = low ? below : above;
+    if (!(depth < 1)) continue;
+    for (int d = 0; d < D; ++d) n[count][d] = d == a ? (low ? -1.0 : 1.0) : 0.0;
+    s[count++] = 1 - (depth > 0 ? depth : 0.0);
+  }
+  return count;
+}
+
+// The velocity on a convex edge: one entering the box through every face of the edge is projected through the
+// face it enters least steeply (the nearest velocity that stays out); any other passes.
+template <int D, typename T>
+FLUME_HD void apply_convex_edge(T* v, const double (*n)[D], int faces, const T* vb, Bc bc, T mu) {
+  if (bc == Bc::kSticky) {
+    for (int a = 0; a < D; ++a) v[a] = vb[a];
+    return;
+  }
+  int least = -1;
+  double least_vn = 0;
+  for (int f = 0; f < faces; ++f) {
+    double vn = 0;
+    for (int d = 0; d < D; ++d) vn += double(v[d] - vb[d]) * n[f][d];
+    if (vn >= 0) return;
+    if (least < 0 || vn > least_vn) least = f, least_vn = vn;
+  }
+  T nf[D];
+  for (int d = 0; d < D; ++d) nf[d] = T(n[least][d]);
+  project_velocity<D>(v, nf, vb, bc, mu);
+}
+
+// A box wall's action on a node it holds (wall_faces' faces n): blended near its surface (surface_faces).
+template <int D, typename T>
+FLUME_HD void apply_box_wall(T* v, const double* x, const double* lo, const double* hi, double dx,
+                             const double (*n)[D], int faces, const T* vb, Bc bc, T mu) {
+  double ns[D][D], s[D];
+  const int near = surface_faces<D>(x, lo, hi, dx, ns, s);
+  T v0[D], out[D] = {};
+  for (int d = 0; d < D; ++d) v0[d] = v[d];
+  for (unsigned subset = 0; subset < (1u << near); ++subset) {
+    double share = 1;
+    double nsub[D][D];
+    int k = 0;
+    for (int f = 0; f < near; ++f) {
+      const bool in = subset & (1u << f);
+      share *= in ? s[f] : 1 - s[f];
+      if (in) {
+        for (int d = 0; d < D; ++d) nsub[k][d] = ns[f][d];
+        ++k;
+      }
+    }
+    if (!(share > 0)) continue;
+    T w[D];
+    for (int d = 0; d < D; ++d) w[d] = v0[d];
+    if (k == 0)
+      apply_wall<D>(w, n, faces, vb, bc, mu);
+    else if (k == 1)
+      apply_wall<D>(w, nsub, 1, vb, bc, mu);
+    else
+      apply_convex_edge<D>(w, nsub, k, vb, bc, mu);
+    for (int d = 0; d < D; ++d) out[d] += T(share) * w[d];
+  }
+  for (int d = 0; d < D; ++d) v[d] = out[d];
+}
+
 // A box's faces between grid lines, resolved below a cell (a `subcell` boundary: the basin's gate panel,
 // whose opening is a calibrated parameter). wall_faces holds the nodes on or inside a box, so a face between
 // two grid lines acts from the next node inside it, and WG1's peak was a staircase of the gate's height. Here

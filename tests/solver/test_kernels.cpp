@@ -205,6 +205,58 @@ TEST(BoxFaces, ANodeIsHeldOnlyByFacesWhoseWaterReachesIt) {
   EXPECT_EQ(wall_faces<2>(inside, true, plo, phi, 0.02, n), 2);
 }
 
+// The velocity a box wall leaves a node with, as the grid update applies it (mpm::apply_box_wall).
+std::pair<double, double> held_by_box(const double* lo, const double* hi, double x, double z, double u, double w) {
+  const double xn[2] = {x, z};
+  double n[4][2];
+  const int faces = flume::mpm::wall_faces<2>(xn, true, lo, hi, 0.02, n);
+  double v[2] = {u, w};
+  const double vb[2] = {0, 0};
+  if (faces) flume::mpm::apply_box_wall<2>(v, xn, lo, hi, 0.02, n, faces, vb, flume::mpm::Bc::kSlip, 0.0);
+  return {v[0], v[1]};
+}
+
+// The basin's gate at dx = 0.02 m: a slip panel 0.04 m (two cells) thick whose lower edge, 0.10 m up, lies on a
+// grid line. Water flowing under it passes its lip row and its corners: a node on the panel's lower face is a
+// point of a plane wall, free along it, and one on its lip corner stops only a velocity entering the panel.
+// wall_faces' hold alone (by both faces of the thin panel and by the lower one) made them stagnation points
+// and choked the flow under the gate by a fifth (docs/validation.md, section 1). Inside the panel, a cell or
+// more from its lower face, both faces still hold a node.
+TEST(BoxSurface, FlowUnderTheGatesLipPasses) {
+  const double lo[2] = {0.50, 0.10}, hi[2] = {0.54, 1.0};
+  const auto corner = held_by_box(lo, hi, 0.50, 0.10, 1.0, -0.3);  // under the lip, going down and on
+  EXPECT_DOUBLE_EQ(corner.first, 1.0);
+  EXPECT_DOUBLE_EQ(corner.second, -0.3);
+  const auto into = held_by_box(lo, hi, 0.50, 0.10, 1.0, 0.3);  // entering through both faces: the shallower
+  EXPECT_NEAR(into.first, 1.0, 1e-12);
+  EXPECT_NEAR(into.second, 0.0, 1e-12);
+  const auto lip = held_by_box(lo, hi, 0.52, 0.10, 1.0, 0.0);  // the panel's lower face, mid-thickness
+  EXPECT_DOUBLE_EQ(lip.first, 1.0);
+  const auto inner = held_by_box(lo, hi, 0.52, 0.14, 1.0, 0.2);  // two cells up inside the panel
+  EXPECT_NEAR(inner.first, 0.0, 1e-12);
+}
+
+// The gate's height is calibrated: as its lower face moves up through the grid the velocity a node keeps changes
+// smoothly, where the node comes onto the face and where the face is a cell away (each face's share falls
+// linearly to zero a cell in from it, mpm::surface_faces).
+TEST(BoxSurface, ANodesVelocityIsContinuousAsTheFaceMoves) {
+  const double hi[2] = {0.54, 1.0}, eps = 1e-7;
+  for (double x : {0.50, 0.52, 0.54})
+    for (double cells : {0.0, 1.0}) {
+      const double below[2] = {0.50, 0.10 - cells * 0.02 - eps}, above[2] = {0.50, 0.10 - cells * 0.02 + eps};
+      const auto a = held_by_box(below, hi, x, 0.10, 1.0, 0.3), b = held_by_box(above, hi, x, 0.10, 1.0, 0.3);
+      if (cells == 0) continue;  // at the face itself the node leaves the box (the subcell cover takes over)
+      EXPECT_NEAR(a.first, b.first, 1e-4) << "x " << x << ", face " << cells << " cells below";
+      EXPECT_NEAR(a.second, b.second, 1e-4) << "x " << x << ", face " << cells << " cells below";
+    }
+  const double on[2] = {0.50, 0.10}, just_under[2] = {0.50, 0.10 - eps};
+  for (double x : {0.50, 0.52, 0.54}) {
+    const auto a = held_by_box(on, hi, x, 0.10, 1.0, 0.3), b = held_by_box(just_under, hi, x, 0.10, 1.0, 0.3);
+    EXPECT_NEAR(a.first, b.first, 1e-4) << "x " << x << ", on the face";
+    EXPECT_NEAR(a.second, b.second, 1e-4) << "x " << x << ", on the face";
+  }
+}
+
 // Near a convex edge a ghost node is reached by water on two sides and has no image (the diagonal reflection is a
 // concave corner's): it keeps its own velocity. Next to one face only, its mirror is across that face.
 TEST(GhostMirror, ConvexEdgeHasNoImage) {
