@@ -662,40 +662,6 @@ FLUME_HD void apply_convex_edge(T* v, const double (*n)[D], int faces, const T* 
   project_velocity<D>(v, nf, vb, bc, mu);
 }
 
-// A box wall's action on a node it holds (wall_faces' faces n): blended near its surface (surface_faces).
-template <int D, typename T>
-FLUME_HD void apply_box_wall(T* v, const double* x, const double* lo, const double* hi, double dx,
-                             const double (*n)[D], int faces, const T* vb, Bc bc, T mu) {
-  double ns[D][D], s[D];
-  const int near = surface_faces<D>(x, lo, hi, dx, ns, s);
-  T v0[D], out[D] = {};
-  for (int d = 0; d < D; ++d) v0[d] = v[d];
-  for (unsigned subset = 0; subset < (1u << near); ++subset) {
-    double share = 1;
-    double nsub[D][D];
-    int k = 0;
-    for (int f = 0; f < near; ++f) {
-      const bool in = subset & (1u << f);
-      share *= in ? s[f] : 1 - s[f];
-      if (in) {
-        for (int d = 0; d < D; ++d) nsub[k][d] = ns[f][d];
-        ++k;
-      }
-    }
-    if (!(share > 0)) continue;
-    T w[D];
-    for (int d = 0; d < D; ++d) w[d] = v0[d];
-    if (k == 0)
-      apply_wall<D>(w, n, faces, vb, bc, mu);
-    else if (k == 1)
-      apply_wall<D>(w, nsub, 1, vb, bc, mu);
-    else
-      apply_convex_edge<D>(w, nsub, k, vb, bc, mu);
-    for (int d = 0; d < D; ++d) out[d] += T(share) * w[d];
-  }
-  for (int d = 0; d < D; ++d) v[d] = out[d];
-}
-
 // A box's faces between grid lines, resolved below a cell (a `subcell` boundary: the basin's gate panel,
 // whose opening is a calibrated parameter). wall_faces holds the nodes on or inside a box, so a face between
 // two grid lines acts from the next node inside it, and WG1's peak was a staircase of the gate's height. Here
@@ -733,6 +699,43 @@ FLUME_HD void subcell_drag(T* v, const T* v_held, double cover, double rate0, T 
   }
   const T factor = T(1 / (1 + rate0 * cover / (1 - cover) * double(dt)));
   for (int a = 0; a < D; ++a) v[a] = v_held[a] + factor * (v[a] - v_held[a]);
+}
+
+// A box wall's action on a node it holds (wall_faces' faces n), near its surface (surface_faces): the velocity
+// each subset S of the near faces alone gives (none: wall_faces' hold; one face: its projection; two or more:
+// the edge's), collapsed face by face as a drag from the state with face f towards the state without it, at the
+// cover 1 - s_f (subcell_drag): the drag form, because a partial hold applied outright every step blocks the flow
+// as a full one does (docs/calibration.md, "Tried and rejected").
+template <int D, typename T>
+FLUME_HD void apply_box_wall(T* v, const double* x, const double* lo, const double* hi, double dx,
+                             const double (*n)[D], int faces, const T* vb, Bc bc, T mu, double rate0, T dt) {
+  double ns[D][D], s[D];
+  const int near = surface_faces<D>(x, lo, hi, dx, ns, s);
+  T state[1 << D][D];
+  for (unsigned subset = 0; subset < (1u << near); ++subset) {
+    double nsub[D][D];
+    int k = 0;
+    for (int f = 0; f < near; ++f)
+      if (subset & (1u << f)) {
+        for (int d = 0; d < D; ++d) nsub[k][d] = ns[f][d];
+        ++k;
+      }
+    T* w = state[subset];
+    for (int d = 0; d < D; ++d) w[d] = v[d];
+    if (k == 0)
+      apply_wall<D>(w, n, faces, vb, bc, mu);
+    else if (k == 1)
+      apply_wall<D>(w, nsub, 1, vb, bc, mu);
+    else
+      apply_convex_edge<D>(w, nsub, k, vb, bc, mu);
+  }
+  for (int f = near - 1; f >= 0; --f)
+    for (unsigned subset = 0; subset < (1u << f); ++subset) {
+      T* with = state[subset | (1u << f)];
+      subcell_drag<D>(with, state[subset], 1 - s[f], rate0, dt);
+      for (int d = 0; d < D; ++d) state[subset][d] = with[d];
+    }
+  for (int d = 0; d < D; ++d) v[d] = state[0][d];
 }
 
 }  // namespace flume::mpm

@@ -79,7 +79,7 @@ FLUME_HD bool apply_boundaries(const double* xn, T m, T* v, T dt, double load_we
           T before[D], held[D];
           for (int d = 0; d < D; ++d) before[d] = held[d] = v[d];
           const int nf = wall_faces<D>(nearest, w.box != 0, w.a, w.b, dx, n);
-          apply_box_wall<D>(held, nearest, w.a, w.b, dx, n, nf, w.vb, w.bc, w.mu);
+          apply_box_wall<D>(held, nearest, w.a, w.b, dx, n, nf, w.vb, w.bc, w.mu, subcell_rate0, dt);
           subcell_drag<D>(v, held, cover, subcell_rate0, dt);
           if (impulse)
             for (int d = 0; d < D; ++d)
@@ -92,7 +92,7 @@ FLUME_HD bool apply_boundaries(const double* xn, T m, T* v, T dt, double load_we
     T before[D];
     for (int d = 0; d < D; ++d) before[d] = v[d];
     if (w.box)
-      apply_box_wall<D>(v, xn, w.a, w.b, dx, n, faces, w.vb, w.bc, w.mu);
+      apply_box_wall<D>(v, xn, w.a, w.b, dx, n, faces, w.vb, w.bc, w.mu, subcell_rate0, dt);
     else
       apply_wall<D>(v, n, faces, w.vb, w.bc, w.mu);
     if (impulse)

@@ -212,7 +212,7 @@ std::pair<double, double> held_by_box(const double* lo, const double* hi, double
   const int faces = flume::mpm::wall_faces<2>(xn, true, lo, hi, 0.02, n);
   double v[2] = {u, w};
   const double vb[2] = {0, 0};
-  if (faces) flume::mpm::apply_box_wall<2>(v, xn, lo, hi, 0.02, n, faces, vb, flume::mpm::Bc::kSlip, 0.0);
+  if (faces) flume::mpm::apply_box_wall<2>(v, xn, lo, hi, 0.02, n, faces, vb, flume::mpm::Bc::kSlip, 0.0, 5.0e2, 1e-4);
   return {v[0], v[1]};
 }
 
