@@ -641,25 +641,20 @@ FLUME_HD int surface_faces(const double* x, const double* lo, const double* hi, 
   return count;
 }
 
-// The velocity on a convex edge: one entering the box through every face of the edge is projected through the
-// face it enters least steeply (the nearest velocity that stays out); any other passes.
+// The velocity on a convex edge: one that enters the box through every face of the edge (into the solid's
+// corner) is held by all of them, as wall_faces holds the node; any other passes, round the edge. Holding, not
+// the nearest admissible velocity: that would remove the smaller normal component and keep the larger, turning
+// the push of still water into the corner into a current along one face (a held reservoir then stirred itself,
+// docs/validation.md, section 1). The wall's reaction at an edge may point anywhere in its normal cone, so
+// stopping the inward velocity whole is admissible and dissipates instead of redirecting.
 template <int D, typename T>
 FLUME_HD void apply_convex_edge(T* v, const double (*n)[D], int faces, const T* vb, Bc bc, T mu) {
-  if (bc == Bc::kSticky) {
-    for (int a = 0; a < D; ++a) v[a] = vb[a];
-    return;
-  }
-  int least = -1;
-  double least_vn = 0;
   for (int f = 0; f < faces; ++f) {
     double vn = 0;
     for (int d = 0; d < D; ++d) vn += double(v[d] - vb[d]) * n[f][d];
     if (vn >= 0) return;
-    if (least < 0 || vn > least_vn) least = f, least_vn = vn;
   }
-  T nf[D];
-  for (int d = 0; d < D; ++d) nf[d] = T(n[least][d]);
-  project_velocity<D>(v, nf, vb, bc, mu);
+  apply_wall<D>(v, n, faces, vb, bc, mu);
 }
 
 // A box's faces between grid lines, resolved below a cell (a `subcell` boundary: the basin's gate panel,

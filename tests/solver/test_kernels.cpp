@@ -227,9 +227,14 @@ TEST(BoxSurface, FlowUnderTheGatesLipPasses) {
   const auto corner = held_by_box(lo, hi, 0.50, 0.10, 1.0, -0.3);  // under the lip, going down and on
   EXPECT_DOUBLE_EQ(corner.first, 1.0);
   EXPECT_DOUBLE_EQ(corner.second, -0.3);
-  const auto into = held_by_box(lo, hi, 0.50, 0.10, 1.0, 0.3);  // entering through both faces: the shallower
-  EXPECT_NEAR(into.first, 1.0, 1e-12);
+  // Into the corner, through both faces: held whole. The nearest admissible velocity (1, 0) would turn still
+  // water's push into the corner into a current along the lip.
+  const auto into = held_by_box(lo, hi, 0.50, 0.10, 1.0, 0.3);
+  EXPECT_NEAR(into.first, 0.0, 1e-12);
   EXPECT_NEAR(into.second, 0.0, 1e-12);
+  const auto round = held_by_box(lo, hi, 0.54, 0.10, 0.2, 0.3);  // the downstream corner, rising round it
+  EXPECT_DOUBLE_EQ(round.first, 0.2);
+  EXPECT_DOUBLE_EQ(round.second, 0.3);
   const auto lip = held_by_box(lo, hi, 0.52, 0.10, 1.0, 0.0);  // the panel's lower face, mid-thickness
   EXPECT_DOUBLE_EQ(lip.first, 1.0);
   const auto inner = held_by_box(lo, hi, 0.52, 0.14, 1.0, 0.2);  // two cells up inside the panel
