@@ -26,6 +26,7 @@
 #include "solver/mpm/cpu_ghosts.h"
 #include "solver/mpm/cpu_variants.h"
 #include "solver/mpm/node_k.h"
+#include "solver/mpm/run_state.h"
 #include "solver/mpm/symmetry_zone.h"
 #include "solver/mpm/tiles.h"
 #include "solver/mpm_kernels.h"
@@ -58,13 +59,13 @@ class MpmSolver final : public Simulation {
 
   // --- Simulation (cpu_solver.cpp unless said) ---
   RunStatus step() override;
-  double time() const override { return time_; }
-  double last_dt() const override { return dt_; }
-  long steps() const override { return steps_; }
+  double time() const override { return run_.time; }
+  double last_dt() const override { return run_.dt; }
+  long steps() const override { return run_.steps; }
   size_t particle_count() const override { return n_; }
-  double total_mass() const override { return mass_; }
+  double total_mass() const override { return run_.mass; }
   const Record& record() const override { return instruments_.record(); }
-  const std::string& message() const override { return message_; }
+  const std::string& message() const override { return run_.message; }
   void particle_positions(std::vector<double>& xyz) const override;   // cpu_checkpoint.cpp
   void particle_velocities(std::vector<double>& vel) const override;  // cpu_checkpoint.cpp
   void particle_pressures(std::vector<double>& p) const override;     // cpu_checkpoint.cpp
@@ -86,17 +87,12 @@ class MpmSolver final : public Simulation {
   T x(int d, size_t i) const { return x_[d][i]; }
   T v(int d, size_t i) const { return v_[d][i]; }
   T volume(size_t i) const { return vol_[i]; }  // reference volume: the particle's mass over rho
-  double max_speed() const { return max_speed_; }
+  double max_speed() const { return run_.max_speed; }
   const Scene& scene() const { return scene_; }
 
   // --- the energy audit (cpu_checkpoint.cpp) ---
-  struct Energy {
-    double kinetic = 0, potential = 0, elastic = 0;
-    double debris = 0;  // the boxes' kinetic and potential energy
-    double total() const { return kinetic + potential + elastic + debris; }
-  };
   Energy energy() const;
-  const Energy& last_energy() const { return last_energy_; }
+  const Energy& last_energy() const { return run_.last_energy; }
 
  private:
   // --- set-up (cpu_solver.cpp, cpu_boundaries.cpp) ---
@@ -134,7 +130,6 @@ class MpmSolver final : public Simulation {
 
   // The particles (structure of arrays, in block order).
   size_t n_ = 0;
-  double mass_ = 0;                            // rho times the particles' volumes summed in double
   std::vector<T> x_[D], v_[D], C_[D * D], e_;  // e: volumetric strain J - 1
   std::vector<T> vol_;   // reference volume (solver/seeding.h): the particle's mass is rho vol
   std::vector<T> held_;  // 1 for water the reservoir's vacuum holds (empty when nothing is held)
@@ -165,12 +160,7 @@ class MpmSolver final : public Simulation {
   // The clock, the audit and the run's state.
   enum Stage { kStageSort, kStageP2g, kStageGrid, kStageG2p, kStageOther, kStages };
   double stage_s_[kStages] = {};  // wall seconds per stage of the steps so far (stage_seconds)
-  double time_ = 0, dt_ = 0, max_speed_ = 0;
-  long steps_ = 0;
-  double energy0_ = 0, energy_slack_ = 0;
-  Energy last_energy_;
-  RunStatus status_ = RunStatus::kRunning;
-  std::string message_;
+  RunState run_;  // the clock, the audit's budget, the status (run_state.h)
 };
 
 }  // namespace flume::mpm
