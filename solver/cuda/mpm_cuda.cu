@@ -27,11 +27,13 @@
 // stages: docs/benchmarks.md). The scatter's order is not fixed: results agree with the CPU, and between GPU
 // runs, to round-off.
 //
-// Instruments. The CPU's InstrumentSet is reused unchanged. Its gauges and probes read particle positions
-// and velocities, which are copied to host mirrors lazily, only when one of them samples (2 D arrays of n
-// values: 24 MB for a million particles in 3D float, about 1-2 ms over PCIe, plus the InstrumentSet's O(n)
-// host loop per gauge or probe); the gauges and sections also read the particles' reference volumes, copied
-// only after a sort has moved them. Diagnostics use the energies reduced on the device during G2P: no copy.
+// Instruments. The CPU's InstrumentSet is reused unchanged. Velocity probes, volume gauges and pressure probes
+// (these read after every step) are sums over the particles of one term each (solver/particle_sums.h), reduced
+// here on the device (sum_particles): a few numbers come back. Connected gauges and sections read particle
+// positions and velocities from host mirrors, copied lazily, only on a step where one of them samples (2 D
+// arrays of n values: 24 MB for a million particles in 3D float, about 1-2 ms over PCIe); sections also read
+// the reference volumes, copied only after a sort has moved them. Diagnostics use the energies reduced on the
+// device during G2P: no copy.
 // Load cells sum the wall impulse on the device (atomics into D doubles per wall), copied back each step (a
 // few bytes) only when the scene has load cells.
 //
@@ -80,6 +82,7 @@
 #include "solver/mpm/particle_k.h"
 #include "solver/mpm/run_state.h"
 #include "solver/mpm_kernels.h"
+#include "solver/particle_sums.h"
 #include "solver/seeding.h"
 #include "solver/simulation.h"
 #include "solver/symmetry.h"
@@ -702,6 +705,38 @@ struct AuditParticle {
   }
 };
 
+// The instruments' particle sums (solver/particle_sums.h) on the device: particle i as a term reads it, and
+// the reduction of a term's values over all particles.
+template <int D, typename T>
+struct DeviceParticle {
+  const View<D, T>& s;
+  size_t i;
+  FLUME_HD double x(int d) const { return double(s.x[d][i]); }
+  FLUME_HD double v(int d) const { return double(s.v[d][i]); }
+  FLUME_HD double volume() const { return double(s.vol[i]); }
+  FLUME_HD double pressure() const { return s.law_d.pressure(double(s.e[i])); }
+};
+struct Sums {
+  double v[kMaxParticleSum] = {};
+};
+struct SumsJoin {
+  FLUME_HD Sums operator()(const Sums& a, const Sums& b) const {
+    Sums r;
+    for (int k = 0; k < kMaxParticleSum; ++k) r.v[k] = a.v[k] + b.v[k];
+    return r;
+  }
+};
+template <int D, typename T, class Term>
+struct SumTerm {
+  View<D, T> s;
+  Term term;
+  FLUME_HD Sums operator()(size_t i) const {
+    Sums r;
+    term(DeviceParticle<D, T>{s, i}, r.v);
+    return r;
+  }
+};
+
 template <typename T>
 T* raw(thr::device_vector<T>& v) {
   return thr::raw_pointer_cast(v.data());
@@ -863,7 +898,17 @@ class MpmCuda final : public Simulation {
     }
   }
 
-  // --- read access for the instruments (host mirrors, refreshed lazily) ---
+  // --- read access for the instruments: sums on the device (solver/particle_sums.h); the rest from host
+  // mirrors, refreshed lazily ---
+  static constexpr bool kSumsOnDevice = true;
+  template <class Term>
+  void sum_particles(const Term& term, double* sum) const {
+    static_assert(Term::kValues <= kMaxParticleSum, "a term sums at most kMaxParticleSum values");
+    const SumTerm<D, T, Term> op{const_cast<MpmCuda*>(this)->view(), term};
+    thr::counting_iterator<size_t> first(0);
+    const Sums r = thr::transform_reduce(thr::device, first, first + n_, op, Sums{}, SumsJoin{});
+    for (int k = 0; k < Term::kValues; ++k) sum[k] = r.v[k];
+  }
   int dim() const { return D; }
   size_t n() const { return n_; }
   T x(int d, size_t i) const {
