@@ -75,6 +75,7 @@
 #include "solver/mpm/audit.h"
 #include "solver/mpm/blocks_k.h"
 #include "solver/mpm/boundaries.h"
+#include "solver/mpm/constants.h"
 #include "solver/mpm/debris_k.h"
 #include "solver/mpm/diagnostics_k.h"
 #include "solver/mpm/launch.h"
@@ -94,7 +95,6 @@ namespace {
 namespace thr = THRUST_NS_QUALIFIER;
 using mpm::kBlock;
 
-constexpr int kPad = kBlock;  // nodes of padding below the domain, as on the CPU
 
 FLUME_HD bool is_finite(double v) {
 #if defined(__CUDA_ARCH__)
@@ -743,27 +743,17 @@ T* raw(thr::device_vector<T>& v) {
 }
 
 template <int D, typename T>
-class MpmCuda final : public Simulation {
+class MpmCuda final : public Simulation, private mpm::SceneConstants<D, T> {
   using V = View<D, T>;
+  using K = mpm::SceneConstants<D, T>;  // the scene's constants, as the CPU's (constants.h)
+  using K::dx_, K::inv_dx_, K::grid_lo_, K::gravity_, K::mu_, K::psi_, K::law_, K::law_d_, K::strain_slope_, K::c_;
   static constexpr int kNodes = V::kNodes;
   static constexpr int kNbr = V::kNbr;
   static constexpr int kChannels = V::kChannels;
 
  public:
-  MpmCuda(const Scene& scene, const SimulationOptions&) : scene_(scene), instruments_(scene_) {
-    dx_ = scene.solver.dx;
-    inv_dx_ = T(1) / T(dx_);
-    for (int d = 0; d < D; ++d) {
-      grid_lo_[d] = scene.domain_lo[d] - kPad * dx_;
-      gravity_[d] = T(scene.solver.gravity[d]);
-    }
-    const auto& f = scene.fluid;
-    K_ = T(f.bulk_modulus);
-    gamma_ = T(f.gamma);
-    mu_ = T(f.viscosity);
-    psi_ = T(f.jbar_psi);
-    for (int d = 0; d < D; ++d) strain_slope_[d] = T(-f.density * scene.solver.gravity[d] / f.bulk_modulus);
-    c_ = mpm::sound_speed(f.bulk_modulus, f.density);
+  MpmCuda(const Scene& scene, const SimulationOptions&)
+      : mpm::SceneConstants<D, T>(scene), scene_(scene), instruments_(scene_) {
     if (scene.debris.present) {
       if constexpr (D != 3) throw InputError(scene.file, "debris", "debris need a 3D scene");
       debris_ = std::make_unique<DebrisCoupling>(scene_);
@@ -834,8 +824,7 @@ class MpmCuda final : public Simulation {
     std::vector<T> e(n_);
     thr::copy(e_.begin(), e_.end(), e.begin());
     p.resize(n_);
-    const mpm::TaitLaw<double> law{double(K_), double(gamma_)};
-    for (size_t i = 0; i < n_; ++i) p[i] = law.pressure(double(e[i]));
+    for (size_t i = 0; i < n_; ++i) p[i] = law_d_.pressure(double(e[i]));
   }
   size_t grid_bytes() const override {
     return grid_.capacity() * sizeof(T) + gwall_.capacity() + ghost_axes_.capacity() +
@@ -1009,12 +998,12 @@ class MpmCuda final : public Simulation {
     s.inv_dx = inv_dx_;
     s.rho = T(rho_);
     s.rho_d = rho_;
-    s.law = mpm::TaitLaw<T>(K_, gamma_);
+    s.law = law_;
     s.push_axes = mpm::image_push_axes<D>(scene_.solver.gravity.data());
     s.has_sym = has_sym_;
     s.subcell_rate = mpm::subcell_rate0(c_, dx_);
     s.sym = sym_;
-    s.law_d = mpm::TaitLaw<double>(double(K_), double(gamma_));
+    s.law_d = law_d_;
     s.mu = mu_;
     s.psi = psi_;
     s.fill_tol = T(mpm::kFillTolerance);
@@ -1282,13 +1271,6 @@ class MpmCuda final : public Simulation {
 
   Scene scene_;
   InstrumentSet<MpmCuda> instruments_;
-  double dx_ = 0;
-  T inv_dx_ = 0;
-  double grid_lo_[D] = {};
-  T gravity_[D] = {};
-  T K_ = 0, gamma_ = 0, mu_ = 0, psi_ = 0;
-  T strain_slope_[D] = {};
-  double c_ = 0;
   double spacing_ = 0, rho_ = 0;
   size_t n_ = 0;
   // device: particles (e: volumetric strain J - 1), sort scratch, blocks, grid, walls

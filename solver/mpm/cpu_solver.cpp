@@ -16,22 +16,9 @@ namespace mpm {
 
 template <int D, typename T>
 MpmSolver<D, T>::MpmSolver(const Scene& scene, const SimulationOptions& options)
-    : scene_(scene), instruments_(scene_) {
+    : SceneConstants<D, T>(scene), scene_(scene), instruments_(scene_) {
   if (options.threads > 0) omp_set_num_threads(options.threads);
-  dx_ = scene.solver.dx;
-  inv_dx_ = T(1) / T(dx_);
-  for (int d = 0; d < D; ++d) {
-    grid_lo_[d] = scene.domain_lo[d] - kPad * dx_;
-    gravity_[d] = T(scene.solver.gravity[d]);
-  }
-  const auto& f = scene.fluid;
-  mu_ = T(f.viscosity);
-  psi_ = T(f.jbar_psi);
-  law_ = TaitLaw<T>(T(f.bulk_modulus), T(f.gamma));
-  law_d_ = TaitLaw<double>(double(law_.K), double(law_.gamma));
   fill_tolerance_ = T(kFillTolerance);
-  for (int d = 0; d < D; ++d) strain_slope_[d] = T(-f.density * scene.solver.gravity[d] / f.bulk_modulus);
-  c_ = sound_speed(f.bulk_modulus, f.density);
   ghosts_.set_push_axes(image_push_axes<D>(scene.solver.gravity.data()));
   if (scene.debris.present) {
     if constexpr (D != 3) throw InputError(scene.file, "debris", "debris need a 3D scene");

@@ -21,6 +21,7 @@
 #include "solver/checkpoint.h"
 #include "solver/inflow.h"
 #include "solver/instruments.h"
+#include "solver/mpm/constants.h"
 #include "solver/mpm/cpu_blocks.h"
 #include "solver/mpm/cpu_debris.h"
 #include "solver/mpm/cpu_ghosts.h"
@@ -34,10 +35,8 @@
 
 namespace flume::mpm {
 
-constexpr int kPad = kBlock;  // nodes of padding below the domain, so every node index is non-negative
-
 template <int D, typename T>
-class MpmSolver final : public Simulation {
+class MpmSolver final : public Simulation, private SceneConstants<D, T> {
   static constexpr int kNodes = Pow<D>::of(kBlock);
   static constexpr int kTileNodes = Pow<D>::of(kTile);
   static constexpr int kNbr = Pow<D>::of(3);
@@ -53,6 +52,8 @@ class MpmSolver final : public Simulation {
   using LaneMap = Eigen::Map<Lane>;
   using ConstLaneMap = Eigen::Map<const Lane>;
   using TileBox = mpm::TileBox<D>;
+  using K = SceneConstants<D, T>;  // the scene's constants (constants.h)
+  using K::dx_, K::inv_dx_, K::grid_lo_, K::gravity_, K::mu_, K::psi_, K::law_, K::law_d_, K::strain_slope_, K::c_;
 
  public:
   MpmSolver(const Scene& scene, const SimulationOptions& options);  // cpu_solver.cpp
@@ -113,19 +114,10 @@ class MpmSolver final : public Simulation {
   void apply_inflow(double t0, double t1);                // cpu_solver.cpp
   void fail(const std::string& what);
 
-  // The scene and its constants.
+  // The scene and the constants not in SceneConstants.
   Scene scene_;
   InstrumentSet<MpmSolver> instruments_;
-  double dx_ = 0;
-  T inv_dx_ = 0;
-  double grid_lo_[D] = {};  // the grid's node 0, kPad nodes below the domain
-  T gravity_[D] = {};
-  T mu_ = 0, psi_ = 0;
-  TaitLaw<T> law_;          // the particle loops copy it into a local: a member is reloaded after every store
-  TaitLaw<double> law_d_;   // the same law in double, for the energy audit and diagnostics
-  T fill_tolerance_ = 0;    // mpm::fill_correction
-  T strain_slope_[D] = {};  // s of mpm::hydrostatic_strain
-  double c_ = 0;            // sound speed
+  T fill_tolerance_ = 0;  // mpm::fill_correction
   double spacing_ = 0, rho_ = 0;
 
   // The particles (structure of arrays, in block order).
