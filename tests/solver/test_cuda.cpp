@@ -61,7 +61,8 @@ std::unique_ptr<Simulation> emulated(const Scene& s) { return make_cuda_host_emu
 #endif
 
 // A column of water H = 0.2 m high, 0.1 m wide, at rest on a slip floor between slip walls (the hydrostatic
-// test's scene), with a load cell on the floor.
+// test's scene), with a load cell and a pressure probe on the floor and a velocity probe and a gauge mid-column
+// (the probes and the gauge are summed on the device: solver/particle_sums.h).
 Scene column(int dim, const std::string& precision, double end_time) {
   const bool d2 = dim == 2;
   std::string walls;
@@ -93,7 +94,11 @@ Scene column(int dim, const std::string& precision, double end_time) {
                            R"(],
     "instruments": {"loads": [{"name": "floor", "boundary": "floor", "rate_hz": 100}],
                     "probes": [{"name": "mid", "position": )" +
-                           (d2 ? "[0.05, 0.1]" : "[0.05, 0.05, 0.1]") + R"(}]}
+                           (d2 ? "[0.05, 0.1]" : "[0.05, 0.05, 0.1]") + R"(}],
+                    "gauges": [{"name": "G", "position": )" + (d2 ? "[0.05]" : "[0.05, 0.05]") + R"(}],
+                    "pressure_probes": [{"name": "PS", "position": )" +
+                           (d2 ? "[0.05, 0.0]" : "[0.05, 0.05, 0.0]") + R"(, "normal": )" +
+                           (d2 ? "[0.0, 1.0]" : "[0.0, 0.0, 1.0]") + R"(, "rate_hz": 100}]}
   })";
   return parse_scene_text(text, "column.json");
 }
@@ -120,6 +125,7 @@ struct Difference {
   double floor_load = 0;  // largest difference of the floor load cell's samples, relative to the weight
   double gauge = 0;       // largest difference of gauge samples (m)
   double probe = 0;       // largest difference of probe samples (m/s)
+  double pressure_probe = 0;  // largest difference of pressure probe samples (Pa)
   double energy = 0;  // largest difference of the total energy diagnostic, relative to the potential energy
   double body = 0;    // largest difference of a debris body's centre over the run's steps (m)
   long steps_a = 0, steps_b = 0;
@@ -180,6 +186,7 @@ Difference compare(const Scene& scene, const Factory& make_a, const Factory& mak
   r.floor_load = max_series_diff(ra.loads, rb.loads) / weight;
   r.gauge = max_series_diff(ra.gauges, rb.gauges);
   r.probe = max_series_diff(ra.probes, rb.probes);
+  r.pressure_probe = max_series_diff(ra.pressures, rb.pressures);
   const auto& ea = ra.diagnostics.at("total");
   const auto& eb_total = rb.diagnostics.at("total");
   const double pe0 = std::fabs(ra.diagnostics.at("potential").front());
@@ -188,9 +195,10 @@ Difference compare(const Scene& scene, const Factory& make_a, const Factory& mak
     r.energy = std::max(r.energy, std::fabs(ea[i] - eb_total[i]) / pe0);
   std::printf(
       "%s %s %dD: %ld/%ld steps; max differences: position %.3e m, pressure %.3e Pa, front %.3e m, "
-      "floor load %.3e (of weight), gauge %.3e m, probe %.3e m/s, energy %.3e (of potential), debris %.3e m\n",
+      "floor load %.3e (of weight), gauge %.3e m, probe %.3e m/s, pressure probe %.3e Pa, energy %.3e (of "
+      "potential), debris %.3e m\n",
       scene.name.c_str(), to_string(scene.solver.precision), scene.dimension, r.steps_a, r.steps_b,
-      r.position, r.pressure, r.front, r.floor_load, r.gauge, r.probe, r.energy, r.body);
+      r.position, r.pressure, r.front, r.floor_load, r.gauge, r.probe, r.pressure_probe, r.energy, r.body);
   return r;
 }
 
@@ -222,6 +230,7 @@ void expect_within(const Difference& d, const Bounds& b) {
   EXPECT_LE(d.floor_load, b.load) << "floor load cell";
   EXPECT_LE(d.gauge, b.gauge) << "gauges";
   EXPECT_LE(d.probe, b.probe) << "probes";
+  EXPECT_LE(d.pressure_probe, b.pressure) << "pressure probes";
   EXPECT_LE(d.energy, b.energy) << "energy diagnostic";
   EXPECT_LE(d.body, b.body) << "debris centres";
 }
