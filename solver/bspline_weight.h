@@ -3,10 +3,12 @@
 #pragma once
 #include <cmath>
 
+#include "common/host_device.h"
+
 namespace flume {
 
 // Weight of a distance q in cells (support 1.5 cells).
-inline double bspline_weight(double q) {
+FLUME_HD double bspline_weight(double q) {
   q = std::fabs(q);
   return q < 0.5 ? 0.75 - q * q : (q < 1.5 ? 0.5 * (1.5 - q) * (1.5 - q) : 0.0);
 }

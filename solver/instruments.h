@@ -11,6 +11,7 @@
 #include "solver/scene.h"
 #include "solver/checkpoint.h"
 #include "solver/connected_depth.h"
+#include "solver/particle_sums.h"
 #include "solver/pressure_probes.h"
 #include "solver/simulation.h"
 
@@ -239,14 +240,10 @@ class InstrumentSet {
     const int up = D - 1;
     const double dx = scene_.solver.dx, inv_dx = 1.0 / dx;
     const size_t k = static_cast<size_t>(&g - scene_.instruments.gauges.data());
-    const double lowest = ground_[k] - 0.25 * dx;  // water below the ground here is beside the gauge, not under it
-    double weight = 0;
-    for (size_t i = 0; i < s.n(); ++i) {
-      if (double(s.x(up, i)) < lowest) continue;
-      double w = 1;
-      for (int d = 0; d < up && w > 0; ++d) w *= bspline_weight((double(s.x(d, i)) - g.position[d]) * inv_dx);
-      if (w > 0) weight += w * double(s.volume(i));
-    }
+    GaugeTerm term{up, {g.position[0], up == 2 ? g.position[1] : 0.0}, 0, inv_dx};
+    term.lowest = ground_[k] - 0.25 * dx;  // water below the ground here is beside the gauge, not under it
+    double weight;
+    sum_particles(s, term, &weight);
     const double area = up == 2 ? dx * dx : dx;
     const double depth = open_[k] > 0 ? weight / (area * open_[k]) : 0.0;
     return ground_[k] + depth;
@@ -256,19 +253,9 @@ class InstrumentSet {
   // no water is there (a dry probe has no velocity).
   void probe_velocity(const Solver& s, const Vec3d& p, double* v) const {
     const int D = s.dim();
-    const double inv_dx = 1.0 / scene_.solver.dx;
-    double wsum = 0, acc[3] = {0, 0, 0};
-    for (size_t i = 0; i < s.n(); ++i) {
-      double w = 1;
-      for (int d = 0; d < D && w > 0; ++d) {
-        const double r = std::fabs(double(s.x(d, i)) - p[d]) * inv_dx;
-        w *= r < 0.5 ? 0.75 - r * r : (r < 1.5 ? 0.5 * (1.5 - r) * (1.5 - r) : 0.0);
-      }
-      if (w <= 0) continue;
-      wsum += w;
-      for (int d = 0; d < D; ++d) acc[d] += w * double(s.v(d, i));
-    }
-    for (int d = 0; d < D; ++d) v[d] = wsum > 0 ? acc[d] / wsum : std::numeric_limits<double>::quiet_NaN();
+    double sum[ProbeTerm::kValues];  // the weight, then the weighted velocity
+    sum_particles(s, ProbeTerm{D, {p[0], p[1], p[2]}, 1.0 / scene_.solver.dx}, sum);
+    for (int d = 0; d < D; ++d) v[d] = sum[0] > 0 ? sum[1 + d] / sum[0] : std::numeric_limits<double>::quiet_NaN();
   }
 
   // Depth and depth-averaged streamwise velocity across a section. Each particle counts with the quadratic

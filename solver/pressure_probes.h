@@ -15,7 +15,8 @@
 // reports the mean of its per-step readings over the interval (each weighted by its step), so a short impact
 // between two samples is not lost; the first sample (t = 0) is the reading then. Each step costs one parallel pass
 // over the particles' positions and, when one is in a probe's support, the solver's pass computing every
-// particle's pressure (on the CUDA backend both copy the particles to the host after every step).
+// particle's pressure; a backend that sums on its device (the CUDA backend) instead reduces each probe's
+// PressureTerm there (solver/particle_sums.h), and only the sums come to the host.
 #pragma once
 #include <algorithm>
 #include <cmath>
@@ -27,6 +28,7 @@
 #endif
 
 #include "solver/bspline_weight.h"
+#include "solver/particle_sums.h"
 #include "solver/checkpoint.h"
 #include "solver/scene.h"
 #include "solver/simulation.h"
@@ -49,9 +51,21 @@ class PressureProbeSet {
   void read(const Solver& s, std::vector<double>& out) {
     const auto& probes = scene_.instruments.pressure_probes;
     const int D = s.dim();
-    const double dx = scene_.solver.dx, inv_dx = 1.0 / dx, rho = scene_.fluid.density;
+    const double dx = scene_.solver.dx, rho = scene_.fluid.density;
     const auto& g = scene_.solver.gravity;
     const size_t np = probes.size();
+    if constexpr (sums_on_device<Solver>) {
+      out.assign(np, 0.0);
+      for (size_t k = 0; k < np; ++k) {
+        const auto& p = probes[k];
+        const PressureTerm term{D,  {p.position[0], p.position[1], p.position[2]},
+                                {p.normal[0], p.normal[1], p.normal[2]}, {g[0], g[1], g[2]}, dx, rho};
+        double sum[PressureTerm::kValues];
+        sum_particles(s, term, sum);
+        out[k] = sum[0] > 0 ? sum[1] / sum[0] : 0.0;
+      }
+      return;
+    }
     wsum_.assign(np, 0.0);
     psum_.assign(np, 0.0);
     // First the particles in a support, from their positions alone (in parallel: each thread gathers its
@@ -75,22 +89,9 @@ class PressureProbeSet {
       for (int d = 0; d < D; ++d) x[d] = double(s.x(d, i));
       for (size_t k = 0; k < np; ++k) {
         const auto& p = probes[k];
-        double r[3] = {0, 0, 0}, sn = 0;
-        bool near = true;
-        for (int d = 0; d < D && near; ++d) {
-          r[d] = x[d] - p.position[d];
-          near = std::fabs(r[d]) < 1.5 * dx;  // the support lies in this box
-        }
-        if (!near) continue;
-        for (int d = 0; d < D; ++d) sn += r[d] * p.normal[d];
-        if (sn < -0.5 * dx || sn >= dx) continue;
-        double t2 = 0;
-        for (int d = 0; d < D; ++d) t2 += (r[d] - sn * p.normal[d]) * (r[d] - sn * p.normal[d]);
-        const double w = bspline_weight(std::sqrt(t2) * inv_dx);
-        if (w <= 0) continue;
-        double head = 0;  // rho g . (x_face - x_p)
-        for (int d = 0; d < D; ++d) head -= g[d] * r[d];
-        local_[static_cast<size_t>(me)].push_back({i, k, w, rho * head});
+        double w, carry;
+        if (pressure_probe_hit(D, x, p.position.data(), p.normal.data(), dx, g.data(), rho, w, carry))
+          local_[static_cast<size_t>(me)].push_back({i, k, w, carry});
       }
     }
     hits_.clear();

@@ -27,11 +27,13 @@
 // stages: docs/benchmarks.md). The scatter's order is not fixed: results agree with the CPU, and between GPU
 // runs, to round-off.
 //
-// Instruments. The CPU's InstrumentSet is reused unchanged. Its gauges and probes read particle positions
-// and velocities, which are copied to host mirrors lazily, only when one of them samples (2 D arrays of n
-// values: 24 MB for a million particles in 3D float, about 1-2 ms over PCIe, plus the InstrumentSet's O(n)
-// host loop per gauge or probe); the gauges and sections also read the particles' reference volumes, copied
-// only after a sort has moved them. Diagnostics use the energies reduced on the device during G2P: no copy.
+// Instruments. The CPU's InstrumentSet is reused unchanged. Velocity probes, volume gauges and pressure probes
+// (these read after every step) are sums over the particles of one term each (solver/particle_sums.h), reduced
+// here on the device (sum_particles): a few numbers come back. Connected gauges and sections read particle
+// positions and velocities from host mirrors, copied lazily, only on a step where one of them samples (2 D
+// arrays of n values: 24 MB for a million particles in 3D float, about 1-2 ms over PCIe); sections also read
+// the reference volumes, copied only after a sort has moved them. Diagnostics use the energies reduced on the
+// device during G2P: no copy.
 // Load cells sum the wall impulse on the device (atomics into D doubles per wall), copied back each step (a
 // few bytes) only when the scene has load cells.
 //
@@ -73,12 +75,15 @@
 #include "solver/mpm/audit.h"
 #include "solver/mpm/blocks_k.h"
 #include "solver/mpm/boundaries.h"
+#include "solver/mpm/constants.h"
 #include "solver/mpm/debris_k.h"
 #include "solver/mpm/diagnostics_k.h"
 #include "solver/mpm/launch.h"
 #include "solver/mpm/node_k.h"
 #include "solver/mpm/particle_k.h"
+#include "solver/mpm/run_state.h"
 #include "solver/mpm_kernels.h"
+#include "solver/particle_sums.h"
 #include "solver/seeding.h"
 #include "solver/simulation.h"
 #include "solver/symmetry.h"
@@ -90,7 +95,6 @@ namespace {
 namespace thr = THRUST_NS_QUALIFIER;
 using mpm::kBlock;
 
-constexpr int kPad = kBlock;  // nodes of padding below the domain, as on the CPU
 
 FLUME_HD bool is_finite(double v) {
 #if defined(__CUDA_ARCH__)
@@ -701,33 +705,55 @@ struct AuditParticle {
   }
 };
 
+// The instruments' particle sums (solver/particle_sums.h) on the device: particle i as a term reads it, and
+// the reduction of a term's values over all particles.
+template <int D, typename T>
+struct DeviceParticle {
+  const View<D, T>& s;
+  size_t i;
+  FLUME_HD double x(int d) const { return double(s.x[d][i]); }
+  FLUME_HD double v(int d) const { return double(s.v[d][i]); }
+  FLUME_HD double volume() const { return double(s.vol[i]); }
+  FLUME_HD double pressure() const { return s.law_d.pressure(double(s.e[i])); }
+};
+struct Sums {
+  double v[kMaxParticleSum] = {};
+};
+struct SumsJoin {
+  FLUME_HD Sums operator()(const Sums& a, const Sums& b) const {
+    Sums r;
+    for (int k = 0; k < kMaxParticleSum; ++k) r.v[k] = a.v[k] + b.v[k];
+    return r;
+  }
+};
+template <int D, typename T, class Term>
+struct SumTerm {
+  View<D, T> s;
+  Term term;
+  FLUME_HD Sums operator()(size_t i) const {
+    Sums r;
+    term(DeviceParticle<D, T>{s, i}, r.v);
+    return r;
+  }
+};
+
 template <typename T>
 T* raw(thr::device_vector<T>& v) {
   return thr::raw_pointer_cast(v.data());
 }
 
 template <int D, typename T>
-class MpmCuda final : public Simulation {
+class MpmCuda final : public Simulation, private mpm::SceneConstants<D, T> {
   using V = View<D, T>;
+  using K = mpm::SceneConstants<D, T>;  // the scene's constants, as the CPU's (constants.h)
+  using K::dx_, K::inv_dx_, K::grid_lo_, K::gravity_, K::mu_, K::psi_, K::law_, K::law_d_, K::strain_slope_, K::c_;
   static constexpr int kNodes = V::kNodes;
   static constexpr int kNbr = V::kNbr;
   static constexpr int kChannels = V::kChannels;
 
  public:
-  MpmCuda(const Scene& scene, const SimulationOptions&) : scene_(scene), instruments_(scene_) {
-    dx_ = scene.solver.dx;
-    inv_dx_ = T(1) / T(dx_);
-    for (int d = 0; d < D; ++d) {
-      grid_lo_[d] = scene.domain_lo[d] - kPad * dx_;
-      gravity_[d] = T(scene.solver.gravity[d]);
-    }
-    const auto& f = scene.fluid;
-    K_ = T(f.bulk_modulus);
-    gamma_ = T(f.gamma);
-    mu_ = T(f.viscosity);
-    psi_ = T(f.jbar_psi);
-    for (int d = 0; d < D; ++d) strain_slope_[d] = T(-f.density * scene.solver.gravity[d] / f.bulk_modulus);
-    c_ = mpm::sound_speed(f.bulk_modulus, f.density);
+  MpmCuda(const Scene& scene, const SimulationOptions&)
+      : mpm::SceneConstants<D, T>(scene), scene_(scene), instruments_(scene_) {
     if (scene.debris.present) {
       if constexpr (D != 3) throw InputError(scene.file, "debris", "debris need a 3D scene");
       debris_ = std::make_unique<DebrisCoupling>(scene_);
@@ -740,32 +766,24 @@ class MpmCuda final : public Simulation {
       inflow_ = std::make_unique<InflowBoundary<D, T>>(scene_, spacing_, host_arrays());
       inflow_->seed();
       to_device();
-      mass_ = water_mass(h_.vol, rho_);
+      run_.mass = water_mass(h_.vol, rho_);
     }
     setup_boundaries();
     sort_particles();
-    const Energy e = energy();
-    energy0_ = e.total();
-    energy_slack_ = mpm::energy_slack(scene_, mass_, e.kinetic);
-    if (inflow_) energy_slack_ = std::max(energy_slack_, inflow_->energy_scale());
+    run_.start_audit(scene_, energy(), inflow_ ? inflow_->energy_scale() : 0.0);
     instruments_.sample(*this, 0.0, 0.0, true);
   }
 
   RunStatus step() override {
-    if (status_ != RunStatus::kRunning) return status_;
-    double dt = std::min(scene_.solver.max_dt, scene_.solver.cfl * dx_ / (c_ + max_speed_));
-    const double remaining = scene_.solver.end_time - time_;
-    if (dt >= remaining) dt = remaining;
-    if (!(dt > 0)) {
-      status_ = RunStatus::kOk;
-      return status_;
-    }
+    if (run_.status != RunStatus::kRunning) return run_.status;
+    const double dt = run_.next_dt(scene_, dx_, c_);
+    if (dt == 0) return run_.status;
     if (needs_sort_) sort_particles();
     const V s = view();
     thr::fill(thr::device, grid_.begin(), grid_.end(), T(0));
     if (has_loads_) thr::fill(thr::device, impulse_.begin(), impulse_.end(), 0.0);
     // The vacuum's hold: an upward force f(t) m |g| on the held water (as MpmSolver::p2g).
-    const T lift = T(double(dt) * scene_.basin.forcing.hold(time_) * std::fabs(scene_.solver.gravity[D - 1]));
+    const T lift = T(double(dt) * scene_.basin.forcing.hold(run_.time) * std::fabs(scene_.solver.gravity[D - 1]));
     const BlockTile<D> tile{raw(pkeys_), raw(pstart_)};
     mpm::tiled_for<T>(pkeys_.size(), P2GTiled<D, T>{tile, {s, T(dt), lift}});
     if (s.has_sym) mpm::parallel_for(s.nodes, SymmetryFold<D, T>{s});
@@ -780,29 +798,19 @@ class MpmCuda final : public Simulation {
     if (debris_) push_out_of_debris(s);
     host_fresh_ = false;
     audit(T(dt));
-    time_ += dt;
-    dt_ = dt;
-    ++steps_;
-    if (inflow_ && status_ == RunStatus::kRunning) apply_inflow(time_ - dt, time_);
-    if (status_ == RunStatus::kUnstable) {
-      instruments_.sample(*this, time_, dt, true);
-      return status_;
-    }
-    instruments_.add_impulses(load_impulse_, dt);
-    instruments_.sample(*this, time_, dt, false);
-    if (time_ >= scene_.solver.end_time - 1e-12) status_ = RunStatus::kOk;
-    return status_;
+    const auto inflow = [&](double t0, double t1) { apply_inflow(t0, t1); };
+    return run_.end_step(scene_, dt, inflow_ != nullptr, inflow, instruments_, *this, load_impulse_);
   }
 
-  double time() const override { return time_; }
-  double last_dt() const override { return dt_; }
-  long steps() const override { return steps_; }
+  double time() const override { return run_.time; }
+  double last_dt() const override { return run_.dt; }
+  long steps() const override { return run_.steps; }
   size_t particle_count() const override { return n_; }
   const DebrisCoupling* debris() const override { return debris_.get(); }
   DebrisCoupling* debris() override { return debris_.get(); }
-  double total_mass() const override { return mass_; }
+  double total_mass() const override { return run_.mass; }
   const Record& record() const override { return instruments_.record(); }
-  const std::string& message() const override { return message_; }
+  const std::string& message() const override { return run_.message; }
 
   void particle_positions(std::vector<double>& xyz) const override {
     sync_host();
@@ -816,8 +824,7 @@ class MpmCuda final : public Simulation {
     std::vector<T> e(n_);
     thr::copy(e_.begin(), e_.end(), e.begin());
     p.resize(n_);
-    const mpm::TaitLaw<double> law{double(K_), double(gamma_)};
-    for (size_t i = 0; i < n_; ++i) p[i] = law.pressure(double(e[i]));
+    for (size_t i = 0; i < n_; ++i) p[i] = law_d_.pressure(double(e[i]));
   }
   size_t grid_bytes() const override {
     return grid_.capacity() * sizeof(T) + gwall_.capacity() + ghost_axes_.capacity() +
@@ -832,43 +839,18 @@ class MpmCuda final : public Simulation {
     sync_host();
     if (!host_vol_fresh_) sync_volume();
     std::vector<T> C[D * D];
-    for (int k = 0; k < D * D; ++k) {
-      C[k].resize(n_);
-      thr::copy(C_[k].begin(), C_[k].end(), C[k].begin());
-    }
-    for (int d = 0; d < 3; ++d) linear[d] = angular[d] = 0;
-    for (size_t i = 0; i < n_; ++i) {
-      double x[D], v[D], Cp[D * D];
-      for (int d = 0; d < D; ++d) {
-        x[d] = hx_[d][i];
-        v[d] = hv_[d][i];
-      }
-      for (int k = 0; k < D * D; ++k) Cp[k] = C[k][i];
-      mpm::add_particle_momentum<D>(rho_ * double(hvol_[i]), dx_, x, v, Cp, linear, angular);
-    }
+    for (int k = 0; k < D * D; ++k) download(C_[k], C[k]);
+    mpm::particles_momentum<D>(n_, rho_, dx_, hx_, hv_, C, hvol_, linear, angular);
   }
 
   void set_rigid_velocity(const double v0[3], const double omega[3], const double centre[3]) override {
     sync_host();
     std::vector<T> C[D * D];
     for (int k = 0; k < D * D; ++k) C[k].resize(n_);
-    for (size_t i = 0; i < n_; ++i) {
-      double r[D], v[D], Cp[D * D];
-      for (int d = 0; d < D; ++d) r[d] = hx_[d][i] - centre[d];
-      mpm::rigid_motion<D>(v0, omega, r, v, Cp);
-      for (int d = 0; d < D; ++d) hv_[d][i] = T(v[d]);
-      for (int k = 0; k < D * D; ++k) C[k][i] = T(Cp[k]);
-    }
-    max_speed_ = 0;
-    for (size_t i = 0; i < n_; ++i) {
-      double s2 = 0;
-      for (int d = 0; d < D; ++d) s2 += double(hv_[d][i]) * hv_[d][i];
-      max_speed_ = std::max(max_speed_, std::sqrt(s2));
-    }
+    run_.max_speed = mpm::impose_rigid_motion<D>(n_, v0, omega, centre, hx_, hv_, C);
     for (int d = 0; d < D; ++d) thr::copy(hv_[d].begin(), hv_[d].end(), v_[d].begin());
     for (int k = 0; k < D * D; ++k) thr::copy(C[k].begin(), C[k].end(), C_[k].begin());
-    energy0_ = energy().total();
-    energy_slack_ = std::max(energy_slack_, 0.01 * energy().kinetic);
+    run_.restart_audit(energy());
   }
 
   // As MpmSolver::checkpoint: everything a step reads that an earlier step wrote, the particles through the
@@ -887,8 +869,7 @@ class MpmCuda final : public Simulation {
     archive(ar, held_);
     archive(ar, tag_);
     archive(ar, keys_);
-    ar.fields(time_, dt_, max_speed_, steps_, energy0_, energy_slack_, last_energy_, mass_, status_,
-              message_);
+    run_.checkpoint(ar, scene_);  // refuses an unstable run; a finished one resumed to a later end runs on
     ar(needs_sort_);
     instruments_.checkpoint(ar);
     ar.expect("inflow", inflow_ ? 1 : 0);
@@ -897,14 +878,8 @@ class MpmCuda final : public Simulation {
     if (debris_) debris_->checkpoint(ar);
     if (!ar.loading()) return;
     n_ = x_[0].size();
-    const auto bad = [&](size_t size) { return size != n_; };
-    bool mismatch = bad(e_.size()) || bad(vol_.size()) || (!held_.empty() && bad(held_.size())) ||
-                    (!tag_.empty() && bad(tag_.size()));
-    for (int d = 0; d < D; ++d) mismatch = mismatch || bad(x_[d].size()) || bad(v_[d].size());
-    for (auto& c : C_) mismatch = mismatch || bad(c.size());
-    if (mismatch) ar.fail("particles", "particle arrays of different lengths");
-    if (status_ == RunStatus::kUnstable) ar.fail("status", "the checkpointed run had gone unstable");
-    status_ = time_ < scene_.solver.end_time - 1e-12 ? RunStatus::kRunning : RunStatus::kOk;
+    if (!mpm::particle_lengths_agree<D>(n_, x_, v_, C_, e_, vol_, held_, tag_))
+      ar.fail("particles", "particle arrays of different lengths");
     resize_work();
     if (!needs_sort_) {
       if (keys_.size() != n_) ar.fail("particles", "block keys for a different particle count");
@@ -912,7 +887,17 @@ class MpmCuda final : public Simulation {
     }
   }
 
-  // --- read access for the instruments (host mirrors, refreshed lazily) ---
+  // --- read access for the instruments: sums on the device (solver/particle_sums.h); the rest from host
+  // mirrors, refreshed lazily ---
+  static constexpr bool kSumsOnDevice = true;
+  template <class Term>
+  void sum_particles(const Term& term, double* sum) const {
+    static_assert(Term::kValues <= kMaxParticleSum, "a term sums at most kMaxParticleSum values");
+    const SumTerm<D, T, Term> op{const_cast<MpmCuda*>(this)->view(), term};
+    thr::counting_iterator<size_t> first(0);
+    const Sums r = thr::transform_reduce(thr::device, first, first + n_, op, Sums{}, SumsJoin{});
+    for (int k = 0; k < Term::kValues; ++k) sum[k] = r.v[k];
+  }
   int dim() const { return D; }
   size_t n() const { return n_; }
   T x(int d, size_t i) const {
@@ -927,18 +912,13 @@ class MpmCuda final : public Simulation {
     if (!host_vol_fresh_) sync_volume();
     return hvol_[i];
   }
-  double max_speed() const { return max_speed_; }
+  double max_speed() const { return run_.max_speed; }
 
-  struct Energy {
-    double kinetic = 0, potential = 0, elastic = 0;
-    double debris = 0;  // the boxes' kinetic and potential energy
-    double total() const { return kinetic + potential + elastic + debris; }
-  };
   Energy energy() const {
     const Audit a = reduce_audit();
     return {a.ke, a.pe, a.el, debris_ ? debris_->energy() : 0.0};
   }
-  const Energy& last_energy() const { return last_energy_; }
+  const Energy& last_energy() const { return run_.last_energy; }
   const Scene& scene() const { return scene_; }
 
  private:
@@ -967,7 +947,7 @@ class MpmCuda final : public Simulation {
       held_.assign(held.begin(), held.end());
     }
     fill_work_.assign(e_.size(), 0.0);
-    mass_ = water_mass(vols, rho_);
+    run_.mass = water_mass(vols, rho_);
     pblk_.resize(n_);
     keys_.resize(n_);
     order_.resize(n_);
@@ -1018,12 +998,12 @@ class MpmCuda final : public Simulation {
     s.inv_dx = inv_dx_;
     s.rho = T(rho_);
     s.rho_d = rho_;
-    s.law = mpm::TaitLaw<T>(K_, gamma_);
+    s.law = law_;
     s.push_axes = mpm::image_push_axes<D>(scene_.solver.gravity.data());
     s.has_sym = has_sym_;
     s.subcell_rate = mpm::subcell_rate0(c_, dx_);
     s.sym = sym_;
-    s.law_d = mpm::TaitLaw<double>(double(K_), double(gamma_));
+    s.law_d = law_d_;
     s.mu = mu_;
     s.psi = psi_;
     s.fill_tol = T(mpm::kFillTolerance);
@@ -1117,23 +1097,23 @@ class MpmCuda final : public Simulation {
   // The CPU's checks after G2P: NaN/Inf or escaped particles, then energy growth; and the re-sort flag.
   void audit(T dt) {
     const Audit a = reduce_audit();
-    max_speed_ = std::sqrt(a.vmax2);
+    run_.max_speed = std::sqrt(a.vmax2);
     needs_sort_ = a.resort != 0;
-    energy0_ += a.fill_work;  // the volume constraint's work is supplied energy (as in MpmSolver::g2p)
-    const double t_new = time_ + double(dt);
+    run_.energy0 += a.fill_work;  // the volume constraint's work is supplied energy (as in MpmSolver::g2p)
+    const double t_new = run_.time + double(dt);
     if (a.bad >= 0) {
       double xp[D];
       for (int d = 0; d < D; ++d) xp[d] = double(T(x_[d][a.bad]));
-      fail(mpm::bad_particle_message(a.bad_kind, t_new, steps_ + 1, double(dt), a.bad, xp, D));
+      fail(mpm::bad_particle_message(a.bad_kind, t_new, run_.steps + 1, double(dt), a.bad, xp, D));
       return;
     }
     const double e_debris = debris_ ? debris_->energy() : 0.0;
     const double e = a.ke + a.pe + a.el + e_debris;
-    if (e > energy0_ + energy_slack_) {
+    if (e > run_.energy0 + run_.energy_slack) {
       sync_host();
-      fail(mpm::energy_growth_message<D>(t_new, steps_ + 1, e, energy0_, max_speed_, hx_, hv_, n_));
+      fail(mpm::energy_growth_message<D>(t_new, run_.steps + 1, e, run_.energy0, run_.max_speed, hx_, hv_, n_));
     }
-    last_energy_ = {a.ke, a.pe, a.el, e_debris};
+    run_.last_energy = {a.ke, a.pe, a.el, e_debris};
   }
 
   // Debris, as MpmSolver::grid_update and MpmSolver::g2p (debris_coupling.h): the boxes as the host holds them.
@@ -1256,9 +1236,9 @@ class MpmCuda final : public Simulation {
   void apply_inflow(double t0, double t1) {
     to_host();
     const auto change = inflow_->apply(t0, t1);
-    energy0_ += change.energy;
+    run_.energy0 += change.energy;
     to_device();
-    if (change.structural) mass_ = water_mass(h_.vol, rho_);
+    if (change.structural) run_.mass = water_mass(h_.vol, rho_);
     needs_sort_ = needs_sort_ || change.structural;
   }
 
@@ -1271,10 +1251,7 @@ class MpmCuda final : public Simulation {
     if (ar.loading()) a.assign(h.begin(), h.end());
   }
 
-  void fail(const std::string& what) {
-    status_ = RunStatus::kUnstable;
-    message_ = what;
-  }
+  void fail(const std::string& what) { run_.fail(what); }
 
   void sync_host() const {
     for (int d = 0; d < D; ++d) {
@@ -1294,14 +1271,7 @@ class MpmCuda final : public Simulation {
 
   Scene scene_;
   InstrumentSet<MpmCuda> instruments_;
-  double dx_ = 0;
-  T inv_dx_ = 0;
-  double grid_lo_[D] = {};
-  T gravity_[D] = {};
-  T K_ = 0, gamma_ = 0, mu_ = 0, psi_ = 0;
-  T strain_slope_[D] = {};
-  double c_ = 0;
-  double spacing_ = 0, rho_ = 0, mass_ = 0;  // mass_: rho times the particles' volumes summed in double
+  double spacing_ = 0, rho_ = 0;
   size_t n_ = 0;
   // device: particles (e: volumetric strain J - 1), sort scratch, blocks, grid, walls
   thr::device_vector<T> x_[D], v_[D], C_[D * D], e_, vol_, held_, tag_, tmp_;  // tag_: solver/inflow.h
@@ -1338,12 +1308,7 @@ class MpmCuda final : public Simulation {
   mutable bool host_fresh_ = false, host_vol_fresh_ = false;
   std::vector<double> load_impulse_;
   bool needs_sort_ = true;
-  double time_ = 0, dt_ = 0, max_speed_ = 0;
-  long steps_ = 0;
-  double energy0_ = 0, energy_slack_ = 0;
-  Energy last_energy_;
-  RunStatus status_ = RunStatus::kRunning;
-  std::string message_;
+  RunState run_;  // the clock, the audit's budget, the status (run_state.h)
 };
 
 std::unique_ptr<Simulation> make(const Scene& scene, const SimulationOptions& options) {

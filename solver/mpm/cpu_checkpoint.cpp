@@ -25,7 +25,7 @@ void MpmSolver<D, T>::checkpoint(StateArchive& ar) {
   ar(vol_);
   ar(held_);
   ar(tag_);
-  ar.fields(time_, dt_, max_speed_, steps_, energy0_, energy_slack_, last_energy_, mass_, status_, message_);
+  run_.checkpoint(ar, scene_);  // refuses an unstable run; a finished one resumed to a later end runs on
   ar.fields(needs_sort_, blocks_.key);  // not a function of the positions (BlockGrid::key)
   instruments_.checkpoint(ar);
   ar.expect("inflow", inflow_ ? 1 : 0);
@@ -34,14 +34,8 @@ void MpmSolver<D, T>::checkpoint(StateArchive& ar) {
   if (debris_) debris_->bodies().checkpoint(ar);
   if (ar.loading()) {
     n_ = x_[0].size();
-    const auto bad = [&](const std::vector<T>& a) { return a.size() != n_; };
-    bool mismatch = bad(e_) || bad(vol_) || (!held_.empty() && bad(held_)) || (!tag_.empty() && bad(tag_));
-    for (int d = 0; d < D; ++d) mismatch = mismatch || bad(x_[d]) || bad(v_[d]);
-    for (auto& c : C_) mismatch = mismatch || bad(c);
-    if (mismatch) ar.fail("particles", "particle arrays of different lengths");
-    if (status_ == RunStatus::kUnstable) ar.fail("status", "the checkpointed run had gone unstable");
-    // A finished run resumed to a later end time runs on.
-    status_ = time_ < scene_.solver.end_time - 1e-12 ? RunStatus::kRunning : RunStatus::kOk;
+    if (!particle_lengths_agree<D>(n_, x_, v_, C_, e_, vol_, held_, tag_))
+      ar.fail("particles", "particle arrays of different lengths");
     if (!needs_sort_) {
       if (blocks_.key.size() != n_) ar.fail("particles", "block keys for a different particle count");
       blocks_.build(n_, grid_lo_, dx_, walls_);
@@ -51,7 +45,7 @@ void MpmSolver<D, T>::checkpoint(StateArchive& ar) {
 }
 
 template <int D, typename T>
-typename MpmSolver<D, T>::Energy MpmSolver<D, T>::energy() const {
+Energy MpmSolver<D, T>::energy() const {
   double ke = 0, pe = 0, el = 0;
 #pragma omp parallel for reduction(+ : ke, pe, el) schedule(static)
   for (size_t i = 0; i < n_; ++i) {
@@ -86,41 +80,18 @@ void MpmSolver<D, T>::particle_pressures(std::vector<double>& p) const {
 
 template <int D, typename T>
 void MpmSolver<D, T>::momentum(double linear[3], double angular[3]) const {
-  for (int d = 0; d < 3; ++d) linear[d] = angular[d] = 0;
-  for (size_t i = 0; i < n_; ++i) {
-    double x[D], v[D], C[D * D];
-    for (int d = 0; d < D; ++d) {
-      x[d] = x_[d][i];
-      v[d] = v_[d][i];
-    }
-    for (int k = 0; k < D * D; ++k) C[k] = C_[k][i];
-    add_particle_momentum<D>(rho_ * double(vol_[i]), dx_, x, v, C, linear, angular);
-  }
+  particles_momentum<D>(n_, rho_, dx_, x_, v_, C_, vol_, linear, angular);
 }
 
 template <int D, typename T>
 void MpmSolver<D, T>::set_rigid_velocity(const double v0[3], const double omega[3], const double centre[3]) {
-  for (size_t i = 0; i < n_; ++i) {
-    double r[D], v[D], C[D * D];
-    for (int d = 0; d < D; ++d) r[d] = x_[d][i] - centre[d];
-    rigid_motion<D>(v0, omega, r, v, C);
-    for (int d = 0; d < D; ++d) v_[d][i] = T(v[d]);
-    for (int k = 0; k < D * D; ++k) C_[k][i] = T(C[k]);
-  }
-  max_speed_ = 0;
-  for (size_t i = 0; i < n_; ++i) {
-    double s2 = 0;
-    for (int d = 0; d < D; ++d) s2 += double(v_[d][i]) * v_[d][i];
-    max_speed_ = std::max(max_speed_, std::sqrt(s2));
-  }
-  energy0_ = energy().total();
-  double ke = energy().kinetic;
-  energy_slack_ = std::max(energy_slack_, 0.01 * ke);
+  run_.max_speed = impose_rigid_motion<D>(n_, v0, omega, centre, x_, v_, C_);
+  run_.restart_audit(energy());
 }
 
 #define FLUME_INSTANTIATE(D, T)                                                   \
   template void MpmSolver<D, T>::checkpoint(StateArchive&);                       \
-  template MpmSolver<D, T>::Energy MpmSolver<D, T>::energy() const;               \
+  template Energy MpmSolver<D, T>::energy() const;                               \
   template void MpmSolver<D, T>::particle_positions(std::vector<double>&) const;  \
   template void MpmSolver<D, T>::particle_velocities(std::vector<double>&) const; \
   template void MpmSolver<D, T>::particle_pressures(std::vector<double>&) const;  \

@@ -191,25 +191,25 @@ void MpmSolver<D, T>::g2p(T dt) {
     el += double(el_b);
   }
   if (debris_) debris_->end_g2p(nblocks);  // the pushed-out particles' momentum to the boxes
-  max_speed_ = std::sqrt(vmax2);
+  run_.max_speed = std::sqrt(vmax2);
   needs_sort_ = resort;
   // The volume constraint (mpm::fill_correction) does work on the water that the audit cannot otherwise
   // see: it restores the elastic energy of water that crowded without compressing. What it adds is counted
   // as supplied energy; what it removes (lowering J of water in tension) is dissipation and is not
   // (crediting it hid an energy rise at a dam-break front: docs/solver.md).
-  energy0_ += fill_work;
-  const double t_new = time_ + double(dt);
+  run_.energy0 += fill_work;
+  const double t_new = run_.time + double(dt);
   if (bad != std::numeric_limits<long>::max()) {
     double xp[D];
     for (int d = 0; d < D; ++d) xp[d] = x_[d][bad];
-    fail(mpm::bad_particle_message(bad_kind, t_new, steps_ + 1, double(dt), bad, xp, D));
+    fail(mpm::bad_particle_message(bad_kind, t_new, run_.steps + 1, double(dt), bad, xp, D));
     return;
   }
   const double e_debris = debris_ ? debris_->bodies().energy() : 0.0;
   const double e = ke + pe + el + e_debris;
-  if (e > energy0_ + energy_slack_)
-    fail(mpm::energy_growth_message<D>(t_new, steps_ + 1, e, energy0_, max_speed_, x_, v_, n_));
-  last_energy_ = {ke, pe, el, e_debris};
+  if (e > run_.energy0 + run_.energy_slack)
+    fail(mpm::energy_growth_message<D>(t_new, run_.steps + 1, e, run_.energy0, run_.max_speed, x_, v_, n_));
+  run_.last_energy = {ke, pe, el, e_debris};
 }
 
 #define FLUME_INSTANTIATE(D, T) template void MpmSolver<D, T>::g2p(T);

@@ -32,7 +32,7 @@ void MpmSolver<D, T>::p2g(T dt) {
     slope_h[d] = strain_slope_[d];
     lo_grid[d] = T(grid_lo_[d]);
   }
-  const T lift = T(double(dt) * scene_.basin.forcing.hold(time_) * std::fabs(scene_.solver.gravity[D - 1]));
+  const T lift = T(double(dt) * scene_.basin.forcing.hold(run_.time) * std::fabs(scene_.solver.gravity[D - 1]));
   const long nblocks = static_cast<long>(blocks_.pkeys.size());
   Lane unit[kLanes];
   for (int c = 0; c < kLanes; ++c) unit[c] = Eigen::Matrix<T, kLanes, 1>::Unit(c).array();

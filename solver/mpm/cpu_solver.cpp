@@ -16,22 +16,9 @@ namespace mpm {
 
 template <int D, typename T>
 MpmSolver<D, T>::MpmSolver(const Scene& scene, const SimulationOptions& options)
-    : scene_(scene), instruments_(scene_) {
+    : SceneConstants<D, T>(scene), scene_(scene), instruments_(scene_) {
   if (options.threads > 0) omp_set_num_threads(options.threads);
-  dx_ = scene.solver.dx;
-  inv_dx_ = T(1) / T(dx_);
-  for (int d = 0; d < D; ++d) {
-    grid_lo_[d] = scene.domain_lo[d] - kPad * dx_;
-    gravity_[d] = T(scene.solver.gravity[d]);
-  }
-  const auto& f = scene.fluid;
-  mu_ = T(f.viscosity);
-  psi_ = T(f.jbar_psi);
-  law_ = TaitLaw<T>(T(f.bulk_modulus), T(f.gamma));
-  law_d_ = TaitLaw<double>(double(law_.K), double(law_.gamma));
   fill_tolerance_ = T(kFillTolerance);
-  for (int d = 0; d < D; ++d) strain_slope_[d] = T(-f.density * scene.solver.gravity[d] / f.bulk_modulus);
-  c_ = sound_speed(f.bulk_modulus, f.density);
   ghosts_.set_push_axes(image_push_axes<D>(scene.solver.gravity.data()));
   if (scene.debris.present) {
     if constexpr (D != 3) throw InputError(scene.file, "debris", "debris need a 3D scene");
@@ -42,27 +29,19 @@ MpmSolver<D, T>::MpmSolver(const Scene& scene, const SimulationOptions& options)
     inflow_ = std::make_unique<InflowBoundary<D, T>>(scene_, spacing_, particle_arrays());
     inflow_->seed();
     n_ = x_[0].size();
-    mass_ = water_mass(vol_, rho_);
+    run_.mass = water_mass(vol_, rho_);
   }
   setup_boundaries();
   sort_particles();
-  const Energy e = energy();
-  energy0_ = e.total();
-  energy_slack_ = mpm::energy_slack(scene_, mass_, e.kinetic);
-  if (inflow_) energy_slack_ = std::max(energy_slack_, inflow_->energy_scale());
+  run_.start_audit(scene_, energy(), inflow_ ? inflow_->energy_scale() : 0.0);
   instruments_.sample(*this, 0.0, 0.0, true);
 }
 
 template <int D, typename T>
 RunStatus MpmSolver<D, T>::step() {
-  if (status_ != RunStatus::kRunning) return status_;
-  double dt = std::min(scene_.solver.max_dt, scene_.solver.cfl * dx_ / (c_ + max_speed_));
-  const double remaining = scene_.solver.end_time - time_;
-  if (dt >= remaining) dt = remaining;
-  if (!(dt > 0)) {
-    status_ = RunStatus::kOk;
-    return status_;
-  }
+  if (run_.status != RunStatus::kRunning) return run_.status;
+  const double dt = run_.next_dt(scene_, dx_, c_);
+  if (dt == 0) return run_.status;
   double t = omp_get_wtime();
   const auto lap = [&](int stage) {  // adds the time since the last lap to a stage (stage_seconds)
     const double now = omp_get_wtime();
@@ -77,19 +56,10 @@ RunStatus MpmSolver<D, T>::step() {
   lap(kStageGrid);
   g2p(T(dt));
   lap(kStageG2p);
-  time_ += dt;
-  dt_ = dt;
-  ++steps_;
-  if (inflow_ && status_ == RunStatus::kRunning) apply_inflow(time_ - dt, time_);
-  if (status_ == RunStatus::kUnstable) {
-    instruments_.sample(*this, time_, dt, true);
-    return status_;
-  }
-  instruments_.add_impulses(load_impulse_, dt);
-  instruments_.sample(*this, time_, dt, false);
+  const auto inflow = [&](double t0, double t1) { apply_inflow(t0, t1); };
+  run_.end_step(scene_, dt, inflow_ != nullptr, inflow, instruments_, *this, load_impulse_);
   lap(kStageOther);
-  if (time_ >= scene_.solver.end_time - 1e-12) status_ = RunStatus::kOk;
-  return status_;
+  return run_.status;
 }
 
 template <int D, typename T>
@@ -109,7 +79,7 @@ void MpmSolver<D, T>::seed_particles() {
   e_.assign(seeds.strain.begin(), seeds.strain.end());
   vol_.assign(seeds.volume.begin(), seeds.volume.end());
   if (seeds.any_held) held_.assign(seeds.held.begin(), seeds.held.end());
-  mass_ = water_mass(vol_, rho_);
+  run_.mass = water_mass(vol_, rho_);
 }
 
 template <int D, typename T>
@@ -149,16 +119,15 @@ void MpmSolver<D, T>::fit_to_blocks() {
 template <int D, typename T>
 void MpmSolver<D, T>::apply_inflow(double t0, double t1) {
   const auto change = inflow_->apply(t0, t1);
-  energy0_ += change.energy;
+  run_.energy0 += change.energy;
   n_ = x_[0].size();
-  if (change.structural) mass_ = water_mass(vol_, rho_);
+  if (change.structural) run_.mass = water_mass(vol_, rho_);
   needs_sort_ = needs_sort_ || change.structural;
 }
 
 template <int D, typename T>
 void MpmSolver<D, T>::fail(const std::string& what) {
-  status_ = RunStatus::kUnstable;
-  message_ = what;
+  run_.fail(what);
 }
 
 template <int D, typename T>

@@ -21,11 +21,13 @@
 #include "solver/checkpoint.h"
 #include "solver/inflow.h"
 #include "solver/instruments.h"
+#include "solver/mpm/constants.h"
 #include "solver/mpm/cpu_blocks.h"
 #include "solver/mpm/cpu_debris.h"
 #include "solver/mpm/cpu_ghosts.h"
 #include "solver/mpm/cpu_variants.h"
 #include "solver/mpm/node_k.h"
+#include "solver/mpm/run_state.h"
 #include "solver/mpm/symmetry_zone.h"
 #include "solver/mpm/tiles.h"
 #include "solver/mpm_kernels.h"
@@ -33,10 +35,8 @@
 
 namespace flume::mpm {
 
-constexpr int kPad = kBlock;  // nodes of padding below the domain, so every node index is non-negative
-
 template <int D, typename T>
-class MpmSolver final : public Simulation {
+class MpmSolver final : public Simulation, private SceneConstants<D, T> {
   static constexpr int kNodes = Pow<D>::of(kBlock);
   static constexpr int kTileNodes = Pow<D>::of(kTile);
   static constexpr int kNbr = Pow<D>::of(3);
@@ -52,19 +52,21 @@ class MpmSolver final : public Simulation {
   using LaneMap = Eigen::Map<Lane>;
   using ConstLaneMap = Eigen::Map<const Lane>;
   using TileBox = mpm::TileBox<D>;
+  using K = SceneConstants<D, T>;  // the scene's constants (constants.h)
+  using K::dx_, K::inv_dx_, K::grid_lo_, K::gravity_, K::mu_, K::psi_, K::law_, K::law_d_, K::strain_slope_, K::c_;
 
  public:
   MpmSolver(const Scene& scene, const SimulationOptions& options);  // cpu_solver.cpp
 
   // --- Simulation (cpu_solver.cpp unless said) ---
   RunStatus step() override;
-  double time() const override { return time_; }
-  double last_dt() const override { return dt_; }
-  long steps() const override { return steps_; }
+  double time() const override { return run_.time; }
+  double last_dt() const override { return run_.dt; }
+  long steps() const override { return run_.steps; }
   size_t particle_count() const override { return n_; }
-  double total_mass() const override { return mass_; }
+  double total_mass() const override { return run_.mass; }
   const Record& record() const override { return instruments_.record(); }
-  const std::string& message() const override { return message_; }
+  const std::string& message() const override { return run_.message; }
   void particle_positions(std::vector<double>& xyz) const override;   // cpu_checkpoint.cpp
   void particle_velocities(std::vector<double>& vel) const override;  // cpu_checkpoint.cpp
   void particle_pressures(std::vector<double>& p) const override;     // cpu_checkpoint.cpp
@@ -86,17 +88,12 @@ class MpmSolver final : public Simulation {
   T x(int d, size_t i) const { return x_[d][i]; }
   T v(int d, size_t i) const { return v_[d][i]; }
   T volume(size_t i) const { return vol_[i]; }  // reference volume: the particle's mass over rho
-  double max_speed() const { return max_speed_; }
+  double max_speed() const { return run_.max_speed; }
   const Scene& scene() const { return scene_; }
 
   // --- the energy audit (cpu_checkpoint.cpp) ---
-  struct Energy {
-    double kinetic = 0, potential = 0, elastic = 0;
-    double debris = 0;  // the boxes' kinetic and potential energy
-    double total() const { return kinetic + potential + elastic + debris; }
-  };
   Energy energy() const;
-  const Energy& last_energy() const { return last_energy_; }
+  const Energy& last_energy() const { return run_.last_energy; }
 
  private:
   // --- set-up (cpu_solver.cpp, cpu_boundaries.cpp) ---
@@ -117,24 +114,14 @@ class MpmSolver final : public Simulation {
   void apply_inflow(double t0, double t1);                // cpu_solver.cpp
   void fail(const std::string& what);
 
-  // The scene and its constants.
+  // The scene and the constants not in SceneConstants.
   Scene scene_;
   InstrumentSet<MpmSolver> instruments_;
-  double dx_ = 0;
-  T inv_dx_ = 0;
-  double grid_lo_[D] = {};  // the grid's node 0, kPad nodes below the domain
-  T gravity_[D] = {};
-  T mu_ = 0, psi_ = 0;
-  TaitLaw<T> law_;          // the particle loops copy it into a local: a member is reloaded after every store
-  TaitLaw<double> law_d_;   // the same law in double, for the energy audit and diagnostics
-  T fill_tolerance_ = 0;    // mpm::fill_correction
-  T strain_slope_[D] = {};  // s of mpm::hydrostatic_strain
-  double c_ = 0;            // sound speed
+  T fill_tolerance_ = 0;  // mpm::fill_correction
   double spacing_ = 0, rho_ = 0;
 
   // The particles (structure of arrays, in block order).
   size_t n_ = 0;
-  double mass_ = 0;                            // rho times the particles' volumes summed in double
   std::vector<T> x_[D], v_[D], C_[D * D], e_;  // e: volumetric strain J - 1
   std::vector<T> vol_;   // reference volume (solver/seeding.h): the particle's mass is rho vol
   std::vector<T> held_;  // 1 for water the reservoir's vacuum holds (empty when nothing is held)
@@ -165,12 +152,7 @@ class MpmSolver final : public Simulation {
   // The clock, the audit and the run's state.
   enum Stage { kStageSort, kStageP2g, kStageGrid, kStageG2p, kStageOther, kStages };
   double stage_s_[kStages] = {};  // wall seconds per stage of the steps so far (stage_seconds)
-  double time_ = 0, dt_ = 0, max_speed_ = 0;
-  long steps_ = 0;
-  double energy0_ = 0, energy_slack_ = 0;
-  Energy last_energy_;
-  RunStatus status_ = RunStatus::kRunning;
-  std::string message_;
+  RunState run_;  // the clock, the audit's budget, the status (run_state.h)
 };
 
 }  // namespace flume::mpm

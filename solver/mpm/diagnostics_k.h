@@ -1,6 +1,10 @@
 // The particles' momentum and the rigid-rotation initial field, for both backends (Simulation::momentum and
 // Simulation::set_rigid_velocity). Host code in double: diagnostics and set-up, not the step.
 #pragma once
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+
 #include "solver/mpm_kernels.h"
 
 namespace flume::mpm {
@@ -44,6 +48,45 @@ FLUME_HD void rigid_motion(const double* v0, const double* omega, const double* 
     const double W[4] = {0, -omega[2], omega[2], 0};
     for (int k = 0; k < 4; ++k) C[k] = W[k];
   }
+}
+
+// Simulation::momentum over n particles in host arrays (x, v: D arrays; C: D*D; vol: reference volumes):
+// linear and angular momentum about the origin, summed in particle order.
+template <int D, class Array>
+void particles_momentum(size_t n, double rho, double dx, const Array* x, const Array* v, const Array* C,
+                        const Array& vol, double* P, double* L) {
+  for (int d = 0; d < 3; ++d) P[d] = L[d] = 0;
+  for (size_t i = 0; i < n; ++i) {
+    double xp[D], vp[D], Cp[D * D];
+    for (int d = 0; d < D; ++d) {
+      xp[d] = x[d][i];
+      vp[d] = v[d][i];
+    }
+    for (int k = 0; k < D * D; ++k) Cp[k] = C[k][i];
+    add_particle_momentum<D>(rho * double(vol[i]), dx, xp, vp, Cp, P, L);
+  }
+}
+
+// Simulation::set_rigid_velocity over n particles in host arrays: v and C of the rigid motion (rigid_motion)
+// about `centre`. Returns the largest speed.
+template <int D, class Array>
+double impose_rigid_motion(size_t n, const double* v0, const double* omega, const double* centre,
+                           const Array* x, Array* v, Array* C) {
+  using T = typename Array::value_type;
+  for (size_t i = 0; i < n; ++i) {
+    double r[D], vp[D], Cp[D * D];
+    for (int d = 0; d < D; ++d) r[d] = x[d][i] - centre[d];
+    rigid_motion<D>(v0, omega, r, vp, Cp);
+    for (int d = 0; d < D; ++d) v[d][i] = T(vp[d]);
+    for (int k = 0; k < D * D; ++k) C[k][i] = T(Cp[k]);
+  }
+  double max_speed = 0;
+  for (size_t i = 0; i < n; ++i) {
+    double s2 = 0;
+    for (int d = 0; d < D; ++d) s2 += double(v[d][i]) * v[d][i];
+    max_speed = std::max(max_speed, std::sqrt(s2));
+  }
+  return max_speed;
 }
 
 }  // namespace flume::mpm

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <memory>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -59,4 +60,14 @@ inline RunStatus run_until(Simulation& sim, double t_end) {
   return s;
 }
 
+// The CUDA backend on the device; the tests that use it skip where there is none (SKIP_WITHOUT_DEVICE).
+inline std::unique_ptr<Simulation> gpu(const Scene& s) {
+  SimulationOptions o;
+  o.backend = Backend::kCuda;
+  return make_simulation(s, o);
+}
+
 }  // namespace flume::test
+
+#define SKIP_WITHOUT_DEVICE() \
+  if (!::flume::cuda_available()) GTEST_SKIP() << "no CUDA device (or flume built without CUDA)"
