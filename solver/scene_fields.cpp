@@ -82,7 +82,8 @@ const ObjectDoc& sph_doc() {
            .above(0)
            .below(3)
            .note("below the dimension D")
-           .def_note("1.5 in 2D, 2.75 in 3D (DualSPHysics' ShiftTFS)")}};
+           .def_note("1.5 in 2D, 2.75 in 3D (DualSPHysics' ShiftTFS)")
+           .eg(1.5)}};
   return d;
 }
 
