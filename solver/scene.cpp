@@ -487,6 +487,11 @@ Scene parse(const json& root_json, const std::string& file) {
     p.viscosity = r.choice<SphViscosity>("viscosity",
                                          {{"laminar_sps", SphViscosity::kLaminarSps}, {"artificial", SphViscosity::kArtificial}});
     p.artificial_alpha = r.number("artificial_alpha");
+    p.shifting = r.choice<SphShifting>("shifting", {{"none", SphShifting::kNone}, {"lind", SphShifting::kLind}});
+    p.shifting_coef = r.number("shifting_coef");
+    // div r is D inside the water: the threshold must lie below it.
+    p.shifting_threshold =
+        r.number_or("shifting_threshold", dim == 2 ? 1.5 : 2.75, Bounds{0.0, double(dim), true, true});
     r.finish();
   }
 

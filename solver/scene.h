@@ -71,12 +71,16 @@ struct FluidSettings {
 // SPH's own settings (the `sph` section; read whatever the method, used when solver.method is sph). Particles
 // sit on the same lattice as MPM's (dx / ppc^(1/D) apart), so gauges and masses are the same.
 enum class SphViscosity { kLaminarSps, kArtificial };
+enum class SphShifting { kNone, kLind };
 struct SphSettings {
   double coefh = 1.0;  // smoothing length h = coefh sqrt(D) spacing (DualSPHysics; the study: h = sqrt(3) spacing)
   double cfl = 0.2;    // dt = cfl min(sqrt(h / |a|max), h / (c0 + h max visc)) (DualSPHysics' step condition)
   double density_diffusion = 0.1;  // delta of the Fourtakas et al. (2020) term; 0: none
   SphViscosity viscosity = SphViscosity::kLaminarSps;
   double artificial_alpha = 0.01;  // Monaghan's alpha, with viscosity "artificial"
+  SphShifting shifting = SphShifting::kLind;  // particle shifting (Lind et al. 2012), as the study runs it
+  double shifting_coef = 2.0;                 // A of dr = -A h |u| dt grad C (the study: 2)
+  double shifting_threshold = 1.5;            // free surface below this div r (DualSPHysics: 1.5 2D, 2.75 3D)
 };
 
 // What a gauge reads (solver/connected_depth.h): the water's volume per unit area over the ground (the

@@ -70,7 +70,20 @@ const ObjectDoc& sph_doc() {
            .in(0, 1)
            .def(0.1),
        choice("viscosity", {"laminar_sps", "artificial"}, "viscosity model").def("laminar_sps"),
-       number("artificial_alpha", "Monaghan's alpha, with viscosity artificial").in(0, 1).def(0.01)}};
+       number("artificial_alpha", "Monaghan's alpha, with viscosity artificial").in(0, 1).def(0.01),
+       choice("shifting", {"none", "lind"},
+              "particle shifting: none, or Lind et al. (2012) as DualSPHysics runs it (the study's eq. 22): "
+              "particles move by -A h |u| dt grad C, not at the free surface")
+           .def("lind"),
+       number("shifting_coef", "A of the shifting displacement -A h |u| dt grad C").above(0).at_most(10).def(2.0),
+       number("shifting_threshold",
+              "free-surface threshold on the divergence of position: no shifting below it, the fraction "
+              "(div r - threshold) / (D - threshold) of it up to D")
+           .above(0)
+           .below(3)
+           .note("below the dimension D")
+           .def_note("1.5 in 2D, 2.75 in 3D (DualSPHysics' ShiftTFS)")
+           .eg(1.5)}};
   return d;
 }
 

@@ -34,6 +34,9 @@ struct Params {
   T g[3] = {0, 0, 0};
   T sps_cs2 = 0;  // (C_s Delta)^2, Smagorinsky (study eq. 12; C_s = 0.12)
   T sps_ci = 0;   // 2/3 C_I Delta^2 (study eq. 11; C_I = 0.0066)
+  // Particle shifting (shift_displacement): A h, the free-surface threshold on div r, the dimension D, and
+  // the largest displacement per step.
+  T shift_ah = 0, shift_tfs = 0, shift_dim = 0, shift_max = 0;
 };
 
 // Wendland C2 (quintic) kernel, study eq. 6: W = alpha_D (1 - q/2)^4 (2q + 1), 0 <= q <= 2, with
@@ -75,6 +78,8 @@ struct Accum {
   T drho = 0;
   T gradv[D * D] = {};  // velocity gradient dv_i/dx_j, for the sub-particle stress
   T visc_dt = 0;        // max_b |v_ab . r_ab| / (r^2 + eta^2), DualSPHysics' viscous step limit
+  T gradc[D] = {};      // grad C = sum_b V_b grad_a W_ab, the gradient of the particle concentration
+  T divr = 0;           // div r = -sum_b V_b r_ab . grad_a W_ab: D inside the fluid, about D/2 at its surface
   int pairs = 0;
 };
 
@@ -159,6 +164,37 @@ FLUME_HD void sps_stress(const Params<T>& P, const T* gradv, T rho, T* tau) {
       if (i == j) t -= nut * T(2) / T(3) * tr + P.sps_ci * s2;
       tau[Sym<D>::at(i, j)] = t * inv_rho;
     }
+}
+
+// Particle shifting (Lind et al. 2012) as DualSPHysics 5 runs it and the study writes it (eq. 22): particles
+// move down the gradient of their concentration, dr = -A h |u| dt grad C, which evens out the clumps and voids
+// of tensile instability. Fluid and wall particles both count in C (DualSPHysics' shifting mode "full"), so
+// the walls' side of a fluid particle is as full as its inside. At the free surface grad C points into the
+// water, and shifting would push particles out of it; so, after DualSPHysics' ShiftTFS, a particle whose
+// div r is below the threshold (the surface layer) is not shifted, and one between it and D is shifted by
+// the fraction (div r - tfs) / (D - tfs). Pair sums:
+template <int D, typename T>
+FLUME_HD void pair_shift(const T* rab, T r2, T F, T V_b, Accum<D, T>& A) {
+  const T vf = V_b * F;
+  for (int d = 0; d < D; ++d) A.gradc[d] += vf * rab[d];
+  A.divr -= vf * r2;
+}
+// The displacement over a step dt for a particle moving at `speed`, at most P.shift_max long (DualSPHysics
+// bounds each component by a tenth of the particle spacing; here the vector's length, so the direction is
+// kept).
+template <int D, typename T>
+FLUME_HD void shift_displacement(const Params<T>& P, const T* gradc, T divr, T speed, T dt, T* dr) {
+  T f = divr < P.shift_tfs ? T(0) : (divr - P.shift_tfs) / (P.shift_dim - P.shift_tfs);
+  f *= -P.shift_ah * speed * dt;
+  T len2 = 0;
+  for (int d = 0; d < D; ++d) {
+    dr[d] = f * gradc[d];
+    len2 += dr[d] * dr[d];
+  }
+  if (len2 > P.shift_max * P.shift_max) {
+    const T s = P.shift_max / std::sqrt(len2);
+    for (int d = 0; d < D; ++d) dr[d] *= s;
+  }
 }
 
 // Symplectic position-Verlet stages (DualSPHysics' Symplectic, Monaghan 2005). Predictor to t + dt/2:

@@ -69,7 +69,7 @@ class SphSolver final : public Simulation {
     if (status_ != RunStatus::kRunning) return status_;
     if (!sort_fluid()) return status_;
     // The accelerations at t (the predictor's), then the step they allow.
-    evaluate(x_, v_, rho_, rhow_, time_);
+    evaluate(x_, v_, rho_, rhow_, time_, false);
     double dt = step_size();
     const double remaining = scene_.solver.end_time - time_;
     if (dt >= remaining) dt = remaining;
@@ -84,7 +84,9 @@ class SphSolver final : public Simulation {
       rhoh_[i] = rho_[i] + h * drho_[i];
     });
     sph::parallel_for(nw_, [&](size_t k) { rhowh_[k] = std::max(T(P_.rho0), rhow_[k] + h * drhow_[k]); });
-    evaluate(xh_, vh_, rhoh_, rhowh_, time_ + 0.5 * dt);
+    // The mid-step evaluation also sums the shifting's concentration gradient, as DualSPHysics' corrector
+    // interaction does.
+    evaluate(xh_, vh_, rhoh_, rhowh_, time_ + 0.5 * dt, shifting_);
     // Corrector to t + dt with the mid-step rates; the hold's work on the water is energy supplied.
     const double lift = hold_lift(time_ + 0.5 * dt);
     double hold_work = 0;
@@ -98,6 +100,7 @@ class SphSolver final : public Simulation {
       for (int d = 0; d < D; ++d) sph::correct(x_[d][i], v_[d][i], a_[d][i], T(dt));
       rho_[i] = sph::correct_density(rho_[i], rhoh_[i], drho_[i], T(dt));
     });
+    if (shifting_) shift(T(dt));
     sph::parallel_for(nw_, [&](size_t k) {
       rhow_[k] = std::max(T(P_.rho0), sph::correct_density(rhow_[k], rhowh_[k], drhow_[k], T(dt)));
     });
@@ -141,7 +144,7 @@ class SphSolver final : public Simulation {
   }
   size_t active_blocks() const override { return grid_.count; }
   size_t particle_bytes() const override {
-    return n_ * sizeof(T) * (5 * D + 5 + 2 * kS) + nw_ * sizeof(T) * (2 * D + 5);
+    return n_ * sizeof(T) * (5 * D + 5 + 2 * kS + (shifting_ ? D + 1 : 0)) + nw_ * sizeof(T) * (2 * D + 5);
   }
 
   void momentum(double linear[3], double angular[3]) const override {
@@ -294,6 +297,11 @@ class SphSolver final : public Simulation {
     const double delta = spacing_;  // the study's Delta l: the particle spacing
     Pd_.sps_cs2 = (0.12 * delta) * (0.12 * delta);
     Pd_.sps_ci = 2.0 / 3.0 * 0.0066 * delta * delta;
+    shifting_ = s.shifting == SphShifting::kLind;
+    Pd_.shift_ah = shifting_ ? s.shifting_coef * h_ : 0.0;
+    Pd_.shift_tfs = s.shifting_threshold;
+    Pd_.shift_dim = D;
+    Pd_.shift_max = 0.1 * spacing_;  // DualSPHysics' bound: a tenth of the particle spacing per step
     P_.h = T(Pd_.h);
     P_.inv_h = T(Pd_.inv_h);
     P_.support2 = T(Pd_.support2);
@@ -309,6 +317,10 @@ class SphSolver final : public Simulation {
     for (int d = 0; d < 3; ++d) P_.g[d] = T(Pd_.g[d]);
     P_.sps_cs2 = T(Pd_.sps_cs2);
     P_.sps_ci = T(Pd_.sps_ci);
+    P_.shift_ah = T(Pd_.shift_ah);
+    P_.shift_tfs = T(Pd_.shift_tfs);
+    P_.shift_dim = T(Pd_.shift_dim);
+    P_.shift_max = T(Pd_.shift_max);
     g_norm_ = 0;
     for (int d = 0; d < D; ++d) g_norm_ += scene_.solver.gravity[d] * scene_.solver.gravity[d];
     g_norm_ = std::sqrt(g_norm_);
@@ -348,6 +360,10 @@ class SphSolver final : public Simulation {
     for (int k = 0; k < kS; ++k) {
       tau_[k].assign(n_, T(0));
       tau_next_[k].assign(n_, T(0));
+    }
+    if (shifting_) {
+      for (int d = 0; d < D; ++d) gradc_[d].assign(n_, T(0));
+      divr_.assign(n_, T(0));
     }
   }
 
@@ -453,9 +469,9 @@ class SphSolver final : public Simulation {
   }
 
   // The rates at one state: accelerations and density rates of the fluid, density rates and forces of the
-  // walls.
+  // walls; with `shift_sums`, the shifting's grad C and div r of the fluid too.
   void evaluate(const std::vector<T>* X, const std::vector<T>* V, const std::vector<T>& R,
-                const std::vector<T>& RW, double t) {
+                const std::vector<T>& RW, double t, bool shift_sums) {
     const sph::Params<T> P = P_;
     sph::parallel_for(n_, [&](size_t i) {
       pf_[i] = sph::tait_pressure(R[i], P);
@@ -483,10 +499,16 @@ class SphSolver final : public Simulation {
         for (int k = 0; k < kS; ++k) tau_b[k] = tau_[k][b];
         sph::pair_fluid_extras<D, T>(P, rab, r2, F, vab, rho_a, k_a, R[b], irf_[b], mass_[b], tau_a, tau_b,
                                      A);
+        if (shift_sums) sph::pair_shift<D, T>(rab, r2, F, mass_[b] * irf_[b], A);
       });
       for_pairs(wall_list_, xw_, vw_, xa, va, [&](uint32_t b, const T* rab, T r2, const T* vab, T F) {
         sph::pair_common<D, T>(P, rab, r2, F, vab, rho_a, ira, p_a, RW[b], irw_[b], pw_[b], mw_, A);
+        if (shift_sums) sph::pair_shift<D, T>(rab, r2, F, mw_ * irw_[b], A);
       });
+      if (shift_sums) {
+        for (int d = 0; d < D; ++d) gradc_[d][a] = A.gradc[d];
+        divr_[a] = A.divr;
+      }
       for (int d = 0; d < D; ++d) a_[d][a] = A.acc[d] + P.g[d];
       if (!held_.empty()) a_[D - 1][a] += held_[a] * lift;  // the vacuum's hold: f(t) m |g| upward
       drho_[a] = A.drho;
@@ -520,6 +542,21 @@ class SphSolver final : public Simulation {
 #pragma omp parallel for reduction(+ : pairs) schedule(static)
     for (long i = 0; i < long(n_); ++i) pairs += pairs_[i];
     interactions_ += pairs;
+  }
+
+  // Particle shifting after the corrector, from the mid-step sums and speed (DualSPHysics adds it to the
+  // corrector's displacement). The cells are re-sorted at the next step's start, so the search margin holds.
+  void shift(T dt) {
+    const sph::Params<T> P = P_;
+    sph::parallel_for(n_, [&](size_t i) {
+      T gc[D], dr[D], s2 = 0;
+      for (int d = 0; d < D; ++d) {
+        gc[d] = gradc_[d][i];
+        s2 += vh_[d][i] * vh_[d][i];
+      }
+      sph::shift_displacement<D, T>(P, gc, divr_[i], std::sqrt(s2), dt, dr);
+      for (int d = 0; d < D; ++d) x_[d][i] += dr[d];
+    });
   }
 
   // Calls body(b, r_ab, r^2, v_ab, F) for every particle b of `list` (positions X, velocities V) within the
@@ -614,6 +651,7 @@ class SphSolver final : public Simulation {
   sph::Params<T> P_;
   sph::Params<double> Pd_;
   bool artificial_ = false;
+  bool shifting_ = false;
   double spacing_ = 0, h_ = 0, search_ = 0, g_norm_ = 0;
   sph::CellGrid<D> grid_;
   sph::CellList fluid_list_, wall_list_;
@@ -625,6 +663,7 @@ class SphSolver final : public Simulation {
   std::vector<T> a_[D], drho_, pf_, irf_, visc_dt_;  // pressure and 1/rho of the state last evaluated
   std::vector<int> pairs_;
   std::vector<T> tau_[kS], tau_next_[kS];  // sub-particle stress over rho^2, from the previous evaluation
+  std::vector<T> gradc_[D], divr_;         // the shifting's sums at the last mid-step (shifting only)
   std::vector<T> scratch_;
   double mass_total_ = 0;
 

@@ -13,9 +13,11 @@
 // gauge compared with its neighbour's record misses it by >= 0.044, a dry gauge by >= 0.12, and the same
 // run with gravity at half strength (a slower surge) fails; the test checks all three.
 //
-//   FLUME_PLOT_DIR=DIR [FLUME_LOBOVSKY_DX=0.005] [FLUME_LOBOVSKY_TEND=8] test_lobovsky
+//   FLUME_PLOT_DIR=DIR [FLUME_LOBOVSKY_DX=0.005] [FLUME_LOBOVSKY_TEND=8] [FLUME_SET="solver.method=sph"]
+//   test_lobovsky
 // writes DIR/lobovsky_2014.svg (simulation against the records, all four gauges) and the simulated gauges as
-// DIR/lobovsky_2014_flume.csv; the environment variables change the resolution (m) and the end time (t*).
+// DIR/lobovsky_2014_flume.csv; the environment variables change the resolution (m), the end time (t*) and
+// any scene setting (test_util.h's env_overrides).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -94,6 +96,7 @@ GaugeRun simulate(double dx, double end_tstar, std::vector<Override> sets = {}) 
   sets.push_back({"solver.dx", std::to_string(dx)});
   sets.push_back({"solver.end_time", std::to_string(end_tstar / t_scale)});
   sets.push_back({"instruments.snapshot_rate_hz", "0"});
+  for (const auto& o : test::env_overrides()) sets.push_back(o);
   const Scene scene =
       load_scene(std::string(FLUME_SOURCE_DIR) + "/scenes/dam_break/lobovsky_2014_2d.json", sets);
   // One thread: results do not depend on the thread count, and on a shared 2-core CI machine OpenMP's

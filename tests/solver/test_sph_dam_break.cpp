@@ -25,11 +25,13 @@ namespace {
 const SimulationOptions kOneThread{Backend::kCpu, 1};
 
 test::FrontCurve simulate_front(double dx) {
-  const Scene scene = load_scene(std::string(FLUME_SOURCE_DIR) + "/scenes/dam_break/martin_moyce_2d.json",
-                                 {{"solver.method", "sph"},
-                                  {"solver.dx", std::to_string(dx)},
-                                  {"fluid.bulk_modulus", "4.0e5"},
-                                  {"instruments.snapshot_rate_hz", "0"}});
+  std::vector<Override> sets = {{"solver.method", "sph"},
+                                 {"solver.dx", std::to_string(dx)},
+                                 {"fluid.bulk_modulus", "4.0e5"},
+                                 {"instruments.snapshot_rate_hz", "0"}};
+  for (const auto& o : test::env_overrides()) sets.push_back(o);  // e.g. FLUME_SET="sph.shifting=none"
+  const Scene scene =
+      load_scene(std::string(FLUME_SOURCE_DIR) + "/scenes/dam_break/martin_moyce_2d.json", sets);
   auto sim = make_simulation(scene, kOneThread);
   test::FrontCurve c;
   EXPECT_EQ(test::record_front(*sim, dx / 2, c), RunStatus::kOk) << sim->message();

@@ -1,6 +1,7 @@
 // Helpers shared by the solver tests.
 #pragma once
 #include <cmath>
+#include <cstdlib>
 #include <cstdio>
 #include <fstream>
 #include <memory>
@@ -52,6 +53,20 @@ inline std::vector<std::vector<double>> read_csv(const std::string& path) {
 inline int run_command(const std::string& cmd) {
   const int rc = std::system(cmd.c_str());
   return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+}
+
+// Extra scene overrides from the environment, FLUME_SET="path=value;path=value", to measure a test's case
+// with other settings (e.g. docs/sph.md's runs with and without shifting); none when unset.
+inline std::vector<Override> env_overrides() {
+  std::vector<Override> out;
+  const char* v = std::getenv("FLUME_SET");
+  std::stringstream ss(v ? v : "");
+  std::string item;
+  while (std::getline(ss, item, ';')) {
+    const size_t eq = item.find('=');
+    if (eq != std::string::npos) out.push_back({item.substr(0, eq), item.substr(eq + 1)});
+  }
+  return out;
 }
 
 inline RunStatus run_until(Simulation& sim, double t_end) {
