@@ -23,6 +23,13 @@ cd "$root"
 mode=${1:-all}
 tests_failed=0
 
+# On the device: flume's archive (flume-bundle) unpacked into $fl, and $out where results go.
+unpack_flume() {
+  fl=$(mktemp -d)
+  tar -C "$fl" -xJf .gpu-flume/flume.tar.xz
+  out=${OUT:-$(mktemp -d)}
+}
+
 if [[ $mode == bundle ]]; then
   build=${2:-$root/build-cuda}
   rm -rf .gpu
@@ -56,9 +63,12 @@ if [[ $mode == flume-bundle ]]; then
   mkdir -p "$stage/bin" "$stage/lib" .gpu-flume
   exclude=$(git rev-parse --git-path info/exclude)
   grep -qx '/.gpu-flume/' "$exclude" 2>/dev/null || echo '/.gpu-flume/' >>"$exclude"
-  cp "$build/bin/flume" "$build/bin/test_cuda" "$stage/bin/"
-  strip "$stage/bin/flume" "$stage/bin/test_cuda"
-  ldd "$stage/bin/flume" "$stage/bin/test_cuda" | awk '/=> \// {print $3}' |
+  # flume, test_cuda, and the test programs whose device tests (Checkpoint.CudaResumed*, Conservation.Cuda*)
+  # need more than test_cuda's libraries.
+  cp "$build/bin/flume" "$build/bin/test_cuda" "$build/bin/test_checkpoint" "$build/bin/test_conservation" \
+    "$stage/bin/"
+  strip "$stage"/bin/*
+  ldd "$stage"/bin/* | awk '/=> \// {print $3}' |
       grep -vE '/(libc|libm|libdl|libpthread|librt|libresolv|ld-linux[^/]*|libcuda)\.so' | sort -u |
     while read -r lib; do cp -L "$lib" "$stage/lib/"; done
   tar -C "$stage" -cf - . | xz -T2 -6 >.gpu-flume/flume.tar.xz
@@ -70,20 +80,58 @@ fi
 # named, then the whole runs, each stage under its own limit, the log written to $OUT:
 #   device: run(command="bench/run_gpu_bench.sh device", carry=[".gpu-flume"], timeout_s=560)
 if [[ $mode == device ]]; then
-  fl=$(mktemp -d)
-  tar -C "$fl" -xJf .gpu-flume/flume.tar.xz
-  out=${OUT:-$(mktemp -d)}
+  unpack_flume
   set +e
   LD_LIBRARY_PATH=$fl/lib FLUME=$fl/bin/flume TEST_CUDA=$fl/bin/test_cuda timeout "${BENCH_LIMIT:-330}" "$0" all 2>&1 |
     tee "$out/bench.log"
   timeout "${RUNS_LIMIT:-200}" "$0" flume-runs 2>&1 | tee "$out/runs.log"
   exit 0
 fi
-if [[ $mode == flume-runs ]]; then
-  fl=$(mktemp -d)
-  tar -C "$fl" -xJf .gpu-flume/flume.tar.xz
+# The 3D validation case (docs/validation.md, section 6) at several resolutions on the GPU, for the probes'
+# errors and the cost of each: result.h5 and run.json of each to $OUT, read back here with
+# `docs/validation/soares_frazao_2007.sh - DIR` (DIR holding that result.h5).
+#   device: run(command="SF_DX='0.05 0.0375' SF_END=10 bench/run_gpu_bench.sh validation-runs", carry=[".gpu-flume"])
+# Every device test (test_cuda's, then the checkpoint and conservation programs' device twins), then the 2D
+# basin at dx 0.01 m over 8 s (the quay crossing of docs/validation.md, section 1), then validation-runs:
+#   device: run(command="bench/run_gpu_bench.sh device-checks", carry=[".gpu-flume"], timeout_s=440)
+if [[ $mode == device-checks ]]; then
+  unpack_flume
+  set +e
+  (
+    export LD_LIBRARY_PATH=$fl/lib FLUME_EXE=$fl/bin/flume FLUME_SOURCE_DIR=$root
+    nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv,noheader
+    timeout 150 "$fl/bin/test_cuda" --gtest_color=no --gtest_filter='Cuda.*:CudaCli.*'
+    timeout 60 "$fl/bin/test_checkpoint" --gtest_color=no --gtest_filter='Checkpoint.CudaResumed*'
+    timeout 40 "$fl/bin/test_conservation" --gtest_color=no --gtest_filter='Conservation.Cuda*'
+  ) 2>&1 | grep -E '^\[ *(OK|FAILED|SKIPPED|PASSED) |Failure|Expected|actual|^[a-z_0-9]+ (double|float) [23]D|NVIDIA' |
+    tee "$out/tests.log"
+  t0=$SECONDS
+  LD_LIBRARY_PATH=$fl/lib timeout "${BASIN_LIMIT:-120}" "$fl/bin/flume" run scenes/waseda/waseda_2d.json \
+    --backend cuda --set solver.dx=0.01 --out "$fl/w2d_dx001" -q --set \
+    'instruments.sections=[{"name":"S060","x_m":0.6,"rate_hz":200},{"name":"S435","x_m":4.35,"rate_hz":200},{"name":"S469","x_m":4.69,"rate_hz":200}]'
+  echo "waseda_2d dx 0.01 cuda: rc $?, $((SECONDS - t0)) s wall" | tee -a "$out/tests.log"
+  cp "$fl/w2d_dx001/result.h5" "$out/w2d_dx001.h5" 2>/dev/null
+  SF_END=${SF_END:-10} "$0" validation-runs 2>&1 | tee -a "$out/tests.log"
+  exit 0
+fi
+if [[ $mode == validation-runs ]]; then
+  unpack_flume
   export LD_LIBRARY_PATH=$fl/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}
-  out=${OUT:-$(mktemp -d)}
+  set +e  # a run that fails or overruns is reported, and the next one runs
+  for dx in ${SF_DX:-0.075 0.05 0.0375}; do
+    t0=$SECONDS
+    timeout "${SF_LIMIT:-240}" "$fl/bin/flume" run scenes/validation/soares_frazao_2007_3d.json --backend cuda \
+      --set solver.dx="$dx" --set solver.end_time="${SF_END:-10}" --out "$fl/sf_$dx" -q
+    echo "soares_frazao dx $dx: rc $?, $((SECONDS - t0)) s wall"
+    cp "$fl/sf_$dx/result.h5" "$out/sf_dx$dx.h5" 2>/dev/null || true
+    cp "$fl/sf_$dx/run.json" "$out/sf_dx$dx.run.json" 2>/dev/null || true
+  done
+  exit 0
+fi
+if [[ $mode == flume-runs ]]; then
+  unpack_flume
+  export LD_LIBRARY_PATH=$fl/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}
+  set +e  # a run that fails or overruns is reported, and the next one runs
   nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv,noheader || true
   echo "# $(date -u +%Y-%m-%dT%H:%MZ), $(nproc) cores, $(git describe --always --dirty 2>/dev/null || echo unknown)"
   one() {  # one NAME TIMEOUT flume-run-arguments...
