@@ -71,7 +71,7 @@ if [[ $mode == flume-bundle ]]; then
   ldd "$stage"/bin/* | awk '/=> \// {print $3}' |
       grep -vE '/(libc|libm|libdl|libpthread|librt|libresolv|ld-linux[^/]*|libcuda)\.so' | sort -u |
     while read -r lib; do cp -L "$lib" "$stage/lib/"; done
-  tar -C "$stage" -cf - . | xz -T2 -6 >.gpu-flume/flume.tar.xz
+  tar -C "$stage" -cf - . | xz -T2 -9e >.gpu-flume/flume.tar.xz
   rm -rf "$stage"
   du -sh .gpu-flume
   exit 0
