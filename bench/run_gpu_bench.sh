@@ -5,18 +5,21 @@
 # particles (LARGE_DX sets it), in float and double. Prints a Markdown table for docs/benchmarks.md with the device
 # named.
 #
-# The GPU machine (tool `device`, H100) has nvcc and CMake but not this project's libraries (HDF5, Eigen,
-# nlohmann-json, GTest, OpenTURNS, ...), and `flume` with its libraries is far over the 64 MiB that can be
-# carried there. So the tests' program test_cuda (flume_solver and GTest only; it holds the benchmark too,
-# timed as `flume bench` times) is built here and carried with its few shared libraries:
+# The GPU machine (tool `device`, H100/H200) has nvcc and CMake but not this project's libraries, so programs
+# built here travel with theirs. The usual way, one call (flume, test_cuda, test_checkpoint and
+# test_conservation in one xz archive, 53 MB):
 #
-#   here:   cmake -S . -B build-cuda -DCMAKE_BUILD_TYPE=Release && cmake --build build-cuda -j2 --target test_cuda
-#           bench/run_gpu_bench.sh bundle [BUILD_DIR]      # copies test_cuda and its libraries into .gpu/
-#   device: run(command="bench/run_gpu_bench.sh", carry=[".gpu"])                  # tests, then the benchmark
-#           run(command="STEPS=400 bench/run_gpu_bench.sh bench-only", carry=[".gpu"])
+#   here:   cmake --build build -j2 && bench/run_gpu_bench.sh flume-bundle build    # writes .gpu-flume/
+#   device: run(command="bench/run_gpu_bench.sh device", carry=[".gpu-flume"], timeout_s=560)
+#             the reference tests, the benchmark, then whole `flume run --backend cuda` runs (below)
+#           run(command="bench/run_gpu_bench.sh device-checks", carry=[".gpu-flume"], timeout_s=440)
+#             every device test (checkpoint and conservation twins too), the 2D basin at dx 0.01 m and the
+#             Soares-Frazao case at three dx (validation-runs)
 #
-# Where a full build sits next to a GPU, FLUME=build-cuda/bin/flume adds `flume bench --backend cuda` figures:
-#   FLUME=build-cuda/bin/flume TEST_CUDA=build-cuda/bin/test_cuda bench/run_gpu_bench.sh
+# The older, smaller bundle (test_cuda alone, into .gpu/): `bench/run_gpu_bench.sh bundle [BUILD_DIR]`, then
+# run(command="bench/run_gpu_bench.sh", carry=[".gpu"]); STEPS=400 ... bench-only for the benchmark alone.
+# Where a full build sits next to a GPU, FLUME=build/bin/flume TEST_CUDA=build/bin/test_cuda adds
+# `flume bench --backend cuda` figures.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 cd "$root"
