@@ -615,16 +615,12 @@ FLUME_HD void apply_wall(T* v, const double (*n)[D], int faces, const T* vb, Bc 
   }
 }
 
-// A box's surface, resolved below a cell. A node under one face of a box (within a cell of it) is a point of a
-// plane wall: free along it. Under two faces of different axes it is on a convex edge, which water passes along
-// either face (under the gate's lip, over the quay's crest, round a column). But wall_faces holds a node by every
-// face within reach, and with slip walls that stops it: the gate's lip row and its corners became stagnation
-// points that choked the flow under a 0.10 m gate by a fifth at dx 0.02 m (docs/validation.md, section 1). So a
-// node within a cell of faces f takes, for each subset S of them, the share prod_{f in S} s_f prod_{f not in S}
-// (1 - s_f), s_f = 1 - depth_f / dx, of the velocity S alone would give it: none, wall_faces' hold; one face, its
-// projection; two or more, the edge's (apply_convex_edge). Each share falls to 0 as a face moves a cell away, so
-// the velocity changes smoothly as a face moves across the grid (the gate's height is calibrated). An axis with
-// both faces within a cell (a wall thinner than two cells) keeps wall_faces' hold.
+// The faces of a box within a cell of node x (outward normals n, at most one per axis) and each one's share
+// s_f = 1 - depth_f / dx: 1 on the face, 0 a cell in. A node under one face is a point of a plane wall, free
+// along it; under two it is on a convex edge, which water passes round (the gate's lip, the quay's crest, a
+// column). The shares let apply_box_wall pass from wall_faces' hold to those rules smoothly as a face moves
+// across the grid, since the gate's height is calibrated. None where an axis has both faces within a cell (a
+// wall thinner than two cells keeps wall_faces' hold).
 template <int D>
 FLUME_HD int surface_faces(const double* x, const double* lo, const double* hi, double dx, double (*n)[D],
                            double* s) {

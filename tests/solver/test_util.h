@@ -84,5 +84,8 @@ inline std::unique_ptr<Simulation> gpu(const Scene& s) {
 
 }  // namespace flume::test
 
+// Skipping is the only honest outcome without a GPU: these tests compare execution on the device (its atomics'
+// order, nvcc's arithmetic) with the CPU. The same CUDA source runs on the host against the CPU in every build
+// (the CudaEmulation tests); bench/run_gpu_bench.sh runs these where a GPU is lent.
 #define SKIP_WITHOUT_DEVICE() \
   if (!::flume::cuda_available()) GTEST_SKIP() << "no CUDA device (or flume built without CUDA)"
