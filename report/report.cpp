@@ -315,6 +315,7 @@ void write_report(const Report& r) {
     json e = {{"metric", s.metric},         {"kind", s.kind},         {"n_train", s.n_train},
               {"n_holdout", s.n_holdout},   {"folds", s.folds},       {"q2_cv", jnum(s.q2_cv)},
               {"q2_holdout", jnum(s.q2_holdout)}, {"mean", s.mean},   {"std", s.std}};
+    if (!s.condition.empty()) e["condition"] = s.condition;
     if (!s.first.empty()) {
       json sb = json::object();
       for (std::size_t k = 0; k < s.inputs.size() && k < s.first.size(); ++k)

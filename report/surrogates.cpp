@@ -52,6 +52,18 @@ SurrogateSummary parse(const store::SurrogateRecord& rec) {
     for (const auto& e : q["sobol"]["first"]) s.first.push_back(estimate(e));
     for (const auto& e : q["sobol"]["total"]) s.total.push_back(estimate(e));
   }
+  if (q.contains("classifier")) {
+    const json& k = q["classifier"];
+    const std::size_t held = k.at("holdout_inside").get<std::size_t>() + k.at("holdout_outside").get<std::size_t>();
+    std::ostringstream w;
+    w << "where " << q.value("given", s.metric) << " exists (" << k.at("inside").get<std::size_t>() << " of "
+      << k.at("inside").get<std::size_t>() + k.at("outside").get<std::size_t>()
+      << " runs); the classifier of where judges " << fmt(k.at("accuracy_cv").get<double>())
+      << " of the runs right by leave-one-out";
+    if (held > 0) w << " and " << fmt(number_or_nan(k.at("accuracy_holdout"))) << " of " << held << " held back";
+    w << ", and puts P(exists) at " << fmt(k.at("p_inside").get<double>());
+    s.condition = w.str();
+  }
   const json& c = q.at("exceedance");
   s.thresholds = numbers(c.at("thresholds"));
   s.p = numbers(c.at("p"));

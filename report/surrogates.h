@@ -28,6 +28,9 @@ struct SurrogateSummary {
   std::size_t replicates = 0;
   std::size_t mc_size = 0;      // input points of the central curve
   std::size_t band_points = 0;  // input points of each replicate or realisation (0: not recorded)
+  // Fitted where a metric exists only (docs/surrogates.md): that metric and its classifier, in words; empty
+  // for a fit over every run.
+  std::string condition;
 };
 
 // The campaign's stored surrogates (none for a store without the table). A malformed row is reported as an

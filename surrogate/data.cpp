@@ -23,7 +23,7 @@ double design_value(const sampling::Distribution& d, bool is_text, double number
 }
 
 TrainingData load_training_data(const std::string& db_file, const std::string& campaign, const std::string& metric,
-                                std::size_t min_runs) {
+                                std::size_t min_runs, const std::string& given) {
   const report::CampaignData c = report::load_campaign(db_file, campaign);
   TrainingData t;
   t.db_file = db_file;
@@ -41,21 +41,19 @@ TrainingData load_training_data(const std::string& db_file, const std::string& c
     t.distributions.push_back(p.distribution);
   }
   t.correlations = spec.correlations;
-  if (std::find(c.metric_names.begin(), c.metric_names.end(), metric) == c.metric_names.end()) {
+  t.given = given;
+  for (const std::string* name : {&metric, &given}) {
+    if (name->empty() || std::find(c.metric_names.begin(), c.metric_names.end(), *name) != c.metric_names.end())
+      continue;
     std::string names;
     for (const auto& n : c.metric_names) names += (names.empty() ? "" : ", ") + n;
-    throw InputError(db_file, "--metric",
-                     "campaign '" + t.campaign + "' has no metric '" + metric + "' (it has: " +
+    throw InputError(db_file, name == &metric ? "--metric" : "--given",
+                     "campaign '" + t.campaign + "' has no metric '" + *name + "' (it has: " +
                          (names.empty() ? "none yet" : names) + ")");
   }
   std::set<std::int64_t> seen;
   for (const auto& row : c.rows) {
     if (!row.ok() || !seen.insert(row.run_id).second) continue;
-    const auto m = row.metrics.find(metric);
-    if (m == row.metrics.end()) {
-      ++t.runs_without_metric;
-      continue;
-    }
     std::vector<double> x;
     for (std::size_t j = 0; j < t.inputs.size(); ++j) {
       const int k = c.parameter_index(t.inputs[j]);
@@ -63,6 +61,13 @@ TrainingData load_training_data(const std::string& db_file, const std::string& c
       x.push_back(design_value(t.distributions[j], v.is_text, v.number, v.text));
     }
     if (std::any_of(x.begin(), x.end(), [](double v) { return !std::isfinite(v); })) continue;
+    const auto m = row.metrics.find(metric);
+    const bool inside = given.empty() ? m != row.metrics.end() : row.metrics.count(given) > 0;
+    if (m == row.metrics.end() || !inside) {
+      t.runs_without_metric += m == row.metrics.end();
+      if (!inside) t.x_outside.push_back(std::move(x));
+      continue;
+    }
     t.run_ids.push_back(row.run_id);
     t.x.push_back(std::move(x));
     t.y.push_back(m->second);

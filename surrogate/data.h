@@ -23,12 +23,18 @@ struct TrainingData {
   std::vector<std::vector<double>> x;  // a choice parameter holds the index of its value
   std::vector<double> y;
   std::size_t runs_without_metric = 0;  // ok runs that lack it (reported, not fitted)
+  // With a condition (`given`, a metric that exists only where an event happened, such as a gauge's arrival):
+  // only runs where it exists are fitted, and the inputs of the ok runs outside it are kept for the classifier
+  // of where it holds (surrogate/fit.h). Without one, the runs that lack the metric itself are "outside".
+  std::string given;
+  std::vector<std::vector<double>> x_outside;
+  std::size_t outside_held_back = 0;  // the last ones of x_outside are held-back runs (--validation)
 };
 
-// Throws flume::InputError naming the file and the option for an unknown campaign or metric, a campaign
-// without parameters (a list design), or fewer than `min_runs` usable runs.
+// Throws flume::InputError naming the file and the option for an unknown campaign or metric (or condition), a
+// campaign without parameters (a list design), or fewer than `min_runs` usable runs.
 TrainingData load_training_data(const std::string& db_file, const std::string& campaign, const std::string& metric,
-                                std::size_t min_runs = 4);
+                                std::size_t min_runs = 4, const std::string& given = "");
 
 // The index a stored parameter value has in its distribution's support (choices), or the value itself.
 double design_value(const sampling::Distribution& d, bool is_text, double number, const std::string& text);

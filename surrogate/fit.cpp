@@ -8,6 +8,7 @@
 #include "campaigns/spec.h"
 #include "common/errors.h"
 #include "sampling/ot_bridge.h"
+#include "surrogate/classifier.h"
 #include "surrogate/ot_models.h"
 
 namespace flume::surrogate {
@@ -212,6 +213,13 @@ FitResult fit_surrogate(const TrainingData& data, const FitSettings& s) {
       r.holdout_predicted = from_column(metamodel(xs));
       r.q2_holdout = OT::MetaModelValidation(xs, ys, metamodel).computePredictivityFactor()[0];
     }
+    const std::size_t outside_train = data.x_outside.size() - data.outside_held_back;
+    if (outside_train > 0) {
+      const auto split = data.x_outside.begin() + static_cast<long>(outside_train);
+      const std::vector<std::vector<double>> xh(data.x.begin() + static_cast<long>(n), data.x.end());
+      r.classifier = classify_inside(xt, {data.x_outside.begin(), split}, xh, {split, data.x_outside.end()}, joint,
+                                     s.mc_size, s.seed);
+    }
   } catch (const OT::Exception& e) {
     detail::rethrow(e);
   }
@@ -219,10 +227,11 @@ FitResult fit_surrogate(const TrainingData& data, const FitSettings& s) {
 }
 
 std::string settings_json(const FitSettings& s) {
-  return json{{"kind", to_string(s.kind)}, {"degree", s.degree},         {"folds", s.folds},
-              {"holdout", s.holdout},      {"validation", s.validation}, {"bootstrap", s.bootstrap},   {"confidence", s.confidence},
-              {"mc_size", s.mc_size},      {"thresholds", s.thresholds}, {"seed", s.seed}}
-      .dump();
+  json j{{"kind", to_string(s.kind)}, {"degree", s.degree},         {"folds", s.folds},
+         {"holdout", s.holdout},      {"validation", s.validation}, {"bootstrap", s.bootstrap},   {"confidence", s.confidence},
+         {"mc_size", s.mc_size},      {"thresholds", s.thresholds}, {"seed", s.seed}};
+  if (!s.given.empty()) j["given"] = s.given;  // absent otherwise: fits stored before conditions stay current
+  return j.dump();
 }
 
 std::string runs_json(const FitResult& r) {
@@ -257,6 +266,17 @@ std::string quality_json(const FitResult& r, const TrainingData& data, const Fit
     for (const auto& e : r.total) total.push_back(estimate_json(e));
     q["sobol"] = {{"first", first}, {"total", total}, {"replicates", r.sobol_replicates}};
   }
+  if (!data.given.empty()) q["given"] = data.given;
+  if (r.classifier) {
+    const ClassifierQuality& k = *r.classifier;
+    q["classifier"] = {{"inside", k.inside},
+                       {"outside", k.outside},
+                       {"accuracy_cv", k.accuracy_cv},
+                       {"holdout_inside", k.holdout_inside},
+                       {"holdout_outside", k.holdout_outside},
+                       {"accuracy_holdout", finite_or_null(k.accuracy_holdout)},
+                       {"p_inside", k.p_inside}};
+  }
   const auto& c = r.exceedance;
   q["exceedance"] = {{"thresholds", c.thresholds}, {"p", c.p},           {"lo", finite_list(c.lo)},
                      {"hi", finite_list(c.hi)},    {"mc_size", c.mc_size}, {"replicates", c.replicates},
@@ -271,6 +291,11 @@ std::string fit_hash(const TrainingData& data, const FitSettings& s) {
     std::snprintf(buf, sizeof buf, "|%lld:%.17g", static_cast<long long>(data.run_ids[i]), data.y[i]);
     text += buf;
   }
+  for (const auto& x : data.x_outside)  // the classifier's runs
+    for (double v : x) {
+      std::snprintf(buf, sizeof buf, "|o%.17g", v);
+      text += buf;
+    }
   return campaigns::text_hash(text);
 }
 

@@ -27,6 +27,7 @@ struct FitSettings {
   std::size_t folds = 5;     // k of the k-fold Q2; 0 or >= n: leave-one-out
   std::size_t holdout = 0;   // the last runs (design order) kept out of the fit for a held-back Q2
   std::string validation;    // or: another campaign (same parameters) whose runs are the held-back ones
+  std::string given;         // fit only runs where this metric exists (TrainingData::given)
   std::size_t bootstrap = 200;  // chaos replicates for the intervals; 0: none
   double confidence = 0.95;
   std::size_t mc_size = 20000;  // input sample of the exceedance curve (per replicate: mc_size / 10)
@@ -44,6 +45,15 @@ struct ExceedanceCurve {
   std::size_t band_points = 0;  // input points each replicate (chaos) or realisation (kriging) is evaluated on
 };
 
+// The classifier of where a metric (or the fit's condition) exists, surrogate/classifier.h.
+struct ClassifierQuality {
+  std::size_t inside = 0, outside = 0;  // training runs of each class
+  double accuracy_cv = 0;               // leave-one-out: the share of training runs classified right
+  std::size_t holdout_inside = 0, holdout_outside = 0;
+  double accuracy_holdout = 0;  // on the held-back runs; NaN without any
+  double p_inside = 0;          // P(inside) under the input law (Monte Carlo on the classifier)
+};
+
 struct FitResult {
   Kind kind = Kind::kChaos;
   std::vector<std::int64_t> train_runs, holdout_runs;
@@ -57,7 +67,8 @@ struct FitResult {
   std::vector<Estimate> first, total;  // chaos: Sobol' indices per input
   std::size_t sobol_replicates = 0;
   double mean = 0, std = 0;  // of the output under the input law, from the surrogate
-  ExceedanceCurve exceedance;
+  ExceedanceCurve exceedance;  // with a condition or runs without the metric: given that it exists
+  std::optional<ClassifierQuality> classifier;  // when some training runs are outside
   std::string model;  // the OpenTURNS result, as XML
 };
 

@@ -7,12 +7,12 @@ namespace flume::surrogate {
 
 StoredFit fit_and_store(const std::string& db_file, const std::string& campaign, const std::string& metric,
                         const FitSettings& requested, bool force) {
-  TrainingData data = load_training_data(db_file, campaign, metric);
+  TrainingData data = load_training_data(db_file, campaign, metric, 4, requested.given);
   FitSettings settings = requested;
   if (!settings.validation.empty()) {
     // The validation campaign's runs go last: they are the held-back ones.
     if (settings.holdout > 0) throw InputError("command line", "--validation", "and --holdout exclude each other");
-    const TrainingData v = load_training_data(db_file, settings.validation, metric, 1);
+    const TrainingData v = load_training_data(db_file, settings.validation, metric, 1, settings.given);
     if (v.inputs != data.inputs)
       throw InputError(db_file, "--validation",
                        "campaign '" + v.campaign + "' has other parameters than '" + data.campaign + "'");
@@ -20,6 +20,8 @@ StoredFit fit_and_store(const std::string& db_file, const std::string& campaign,
     data.y.insert(data.y.end(), v.y.begin(), v.y.end());
     data.run_ids.insert(data.run_ids.end(), v.run_ids.begin(), v.run_ids.end());
     settings.holdout = v.y.size();
+    data.x_outside.insert(data.x_outside.end(), v.x_outside.begin(), v.x_outside.end());
+    data.outside_held_back = v.x_outside.size();
   }
   const std::string hash = fit_hash(data, settings);
   store::CampaignStore db(db_file);

@@ -1,0 +1,63 @@
+#include "surrogate/classifier.h"
+
+#include <cmath>
+
+#include "surrogate/ot_models.h"
+
+namespace flume::surrogate {
+namespace {
+
+std::size_t count_right(const OT::Sample& predicted, const std::vector<double>& label) {
+  std::size_t right = 0;
+  for (std::size_t i = 0; i < label.size(); ++i) right += (predicted(i, 0) > 0.5) == (label[i] > 0.5);
+  return right;
+}
+
+}  // namespace
+
+ClassifierQuality classify_inside(const std::vector<std::vector<double>>& inside,
+                                  const std::vector<std::vector<double>>& outside,
+                                  const std::vector<std::vector<double>>& holdout_inside,
+                                  const std::vector<std::vector<double>>& holdout_outside,
+                                  const OT::Distribution& joint, std::size_t mc_size, std::uint64_t seed) {
+  ClassifierQuality q;
+  q.inside = inside.size();
+  q.outside = outside.size();
+  std::vector<std::vector<double>> x = inside;
+  x.insert(x.end(), outside.begin(), outside.end());
+  std::vector<double> label(inside.size(), 1.0);
+  label.resize(x.size(), 0.0);
+  const OT::Sample xs = detail::to_sample(x), ys = detail::to_column(label);
+  const OT::KrigingResult fitted = detail::fit_kriging(xs, ys);
+
+  // Leave-one-out with the fitted covariance: every run in turn judged by a classifier that never saw it.
+  std::size_t right = 0;
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    OT::Indices rest;
+    for (std::size_t j = 0; j < x.size(); ++j)
+      if (j != i) rest.add(j);
+    const OT::Function f = detail::refit_kriging(fitted, xs.select(rest), ys.select(rest)).getMetaModel();
+    right += (f(xs[i])[0] > 0.5) == (label[i] > 0.5);
+  }
+  q.accuracy_cv = static_cast<double>(right) / static_cast<double>(x.size());
+
+  const OT::Function classifier = fitted.getMetaModel();
+  q.holdout_inside = holdout_inside.size();
+  q.holdout_outside = holdout_outside.size();
+  q.accuracy_holdout = std::nan("");
+  if (!holdout_inside.empty() || !holdout_outside.empty()) {
+    std::vector<std::vector<double>> xh = holdout_inside;
+    xh.insert(xh.end(), holdout_outside.begin(), holdout_outside.end());
+    std::vector<double> lh(holdout_inside.size(), 1.0);
+    lh.resize(xh.size(), 0.0);
+    q.accuracy_holdout =
+        static_cast<double>(count_right(classifier(detail::to_sample(xh)), lh)) / static_cast<double>(xh.size());
+  }
+  OT::RandomGenerator::SetSeed(static_cast<OT::UnsignedInteger>(seed + 404));
+  const OT::Sample at = joint.getSample(mc_size);
+  std::vector<double> all_inside(at.getSize(), 1.0);
+  q.p_inside = static_cast<double>(count_right(classifier(at), all_inside)) / static_cast<double>(at.getSize());
+  return q;
+}
+
+}  // namespace flume::surrogate
