@@ -20,6 +20,7 @@
 #include "common/errors.h"
 #include "common/plot/figure.h"
 #include "common/gauge_summary.h"
+#include "report/gauge_band.h"
 #include "store/h5/run_file.h"
 
 namespace flume::report {
@@ -191,6 +192,28 @@ void print_summary(const std::string& gauge, const Run& r) {
     std::printf(", arrival none (never 5 mm above the first reading, %.4f %s)\n", s.first + 0.0, rec.unit.c_str());
 }
 
+// One line per gauge for the band's runs: the median and the band's quantiles of their peaks and arrivals.
+void print_band_summary(const std::string& gauge, const std::vector<Run>& runs, double level) {
+  const Record& first = runs[0].records.at(gauge);
+  if (first.pressure) return;
+  const double threshold = arrival_threshold(first.unit);
+  std::vector<double> peaks, arrivals;
+  for (const Run& r : runs) {
+    const Record& rec = r.records.at(gauge);
+    const GaugeSummary s = summarize_gauge(rec.time, rec.value, threshold > 0 ? threshold : 0);
+    if (s.has_peak) peaks.push_back(s.peak);
+    if (threshold > 0 && s.arrived) arrivals.push_back(s.arrival_time);
+  }
+  const double a = (1 - level) / 2;
+  std::printf("%s band of %zu runs: peak median %.4f [%.4f, %.4f] %s", gauge.c_str(), runs.size(),
+              sample_quantile(peaks, 0.5), sample_quantile(peaks, a), sample_quantile(peaks, 1 - a),
+              first.unit.c_str());
+  if (threshold > 0)
+    std::printf(", arrival in %zu: median %.3f [%.3f, %.3f] s", arrivals.size(), sample_quantile(arrivals, 0.5),
+                sample_quantile(arrivals, a), sample_quantile(arrivals, 1 - a));
+  std::printf(" (%g %% of the runs between the brackets)\n", 100 * level);
+}
+
 }  // namespace
 
 void sort_gauge_names(std::vector<std::string>& names) {
@@ -225,20 +248,27 @@ void sort_gauge_names(std::vector<std::string>& names) {
 
 void add_gauges_command(CLI::App& app) {
   struct Args {
-    std::vector<std::string> runs;
+    std::vector<std::string> runs, lines;
     std::string out, title, gauges, t_max;
+    bool band = false;
   };
   auto a = std::make_shared<Args>();
   app.footer(
       "One panel per gauge (default: every gauge of the first run), one line per run (LABEL: default the folder's\n"
       "name); prints per gauge and run the peak, its time and the arrival (the first time the record rises 5 mm\n"
       "above its first reading), over t <= --t-max when given. Pressure probes get panels too (after the gauges),\n"
-      "with their peak pressure, its time and the pressure impulse.");
+      "with their peak pressure, its time and the pressure impulse.\n"
+      "--band draws the runs as one band instead (95 % of them at each time, between the 2.5 and 97.5 %\n"
+      "quantiles, and their median; with under 40 runs the band is near their extremes), for the predictive runs\n"
+      "of a calibration's posterior (flume surrogate posterior --draws) or a campaign's members; --line adds\n"
+      "single runs on top of it (the calibration's optimum, a reference run).");
   app.add_option("RUN_DIR", a->runs, "a finished run's folder, optionally =LABEL")->required()->type_name("RUN_DIR[=LABEL]");
   app.add_option("--out", a->out, "the .svg file to write")->required();
   app.add_option("--gauges", a->gauges, "the gauges and pressure probes to show, e.g. WG1,WG2")->type_name("WG1,WG2,...");
   app.add_option("--t-max", a->t_max, "the last time shown and summarised (s)")->type_name("S");
   app.add_option("--title", a->title, "the figure's title");
+  app.add_flag("--band", a->band, "the runs as one band (95 % at each time) and their median");
+  app.add_option("--line", a->lines, "with --band: a run drawn as a line on top (repeatable)")->type_name("RUN_DIR[=LABEL]");
   cli::on_parse(app, [a]() -> int {
     std::vector<std::pair<std::string, std::string>> run_args;  // dir, label
     for (const auto& r : a->runs) run_args.push_back(parse_run_arg(r));
@@ -248,6 +278,11 @@ void add_gauges_command(CLI::App& app) {
     std::vector<std::string> wanted = have_wanted ? parse_gauge_list("--gauges", a->gauges) : std::vector<std::string>{};
     const double t_max = a->t_max.empty() ? std::numeric_limits<double>::infinity() : parse_positive("--t-max", a->t_max);
 
+    if (!a->band && !a->lines.empty()) throw cli::UsageError("--line", "goes with --band (without it every run is a line)");
+    if (a->band && run_args.size() < 2) throw cli::UsageError("--band", "needs at least 2 runs to spread");
+    constexpr double kBandLevel = 0.95;
+    const std::size_t n_band = a->band ? run_args.size() : 0;
+    for (const auto& l : a->lines) run_args.push_back(parse_run_arg(l));
     std::vector<Run> runs;
     for (const auto& [dir, label] : run_args) runs.push_back(open_run(dir, label));
     // The first run decides the default gauges; every run must have each of them.
@@ -282,17 +317,30 @@ void add_gauges_command(CLI::App& app) {
       const Record& first = runs[0].records.at(name);
       ax.title(name).ylabel((first.pressure ? "p (" : "eta (") + first.unit + ")").xlim(t_lo, t_hi);
       if (g == n - 1) ax.xlabel("t (s)");
-      for (std::size_t k = 0; k < runs.size(); ++k) {
+      if (n_band > 0) {
+        std::vector<TimeSeries> records;
+        for (std::size_t k = 0; k < n_band; ++k)
+          records.push_back({runs[k].records.at(name).time, runs[k].records.at(name).value});
+        const GaugeBand b = gauge_band(records, kBandLevel);
+        const std::string band_label = "95 % of " + std::to_string(n_band) + " runs";
+        ax.band(b.time, b.lo, b.hi, {.color = plot::palette(0), .label = g == 0 ? band_label : ""});
+        ax.line(b.time, b.median, {.color = plot::palette(0), .width = 1.5, .label = g == 0 ? "median" : ""});
+      }
+      for (std::size_t k = n_band; k < runs.size(); ++k) {
         const Record& rec = runs[k].records.at(name);
-        // The same colour for a run in every panel; dashed once the palette's eight colours are used up.
+        // The same colour for a run in every panel (the band has the first); dashed once the palette's eight
+        // colours are used up.
+        const std::size_t c = k - n_band + (n_band > 0 ? 1 : 0);
         ax.line(rec.time, rec.value,
-                {.color = plot::palette(k), .width = 1.5, .dash = k < 8 ? plot::Dash::kSolid : plot::Dash::kDashed,
+                {.color = plot::palette(c), .width = 1.5, .dash = c < 8 ? plot::Dash::kSolid : plot::Dash::kDashed,
                  .label = g == 0 ? runs[k].label : ""});
       }
       if (g == 0) ax.legend(plot::Legend::kUpperLeft);  // before the arrival the records are flat
     }
-    for (const std::string& name : wanted)
-      for (const Run& r : runs) print_summary(name, r);
+    for (const std::string& name : wanted) {
+      if (n_band > 0) print_band_summary(name, {runs.begin(), runs.begin() + static_cast<long>(n_band)}, kBandLevel);
+      for (std::size_t k = n_band; k < runs.size(); ++k) print_summary(name, runs[k]);
+    }
     fig.save(out);
     std::printf("wrote %s\n", out.c_str());
     return kExitOk;

@@ -18,6 +18,7 @@
 
 #include "common/plot/figure.h"
 #include "tests/common/run_command.h"
+#include "report/gauge_band.h"
 #include "report/gauges.h"
 #include "common/gauge_summary.h"
 #include "store/h5/run_file.h"
@@ -264,3 +265,53 @@ TEST(GaugeNames, NaturalOrder) {
 }
 
 }  // namespace
+
+namespace {
+
+// Type-7 quantiles (Hyndman & Fan 1996), by hand: p (n - 1) = h, value x[floor h] + frac(h) (x[ceil h] - ...).
+TEST(GaugeBand, SampleQuantileInterpolatesBetweenOrderStatistics) {
+  std::vector<double> v{3, 1, 2, 4};
+  EXPECT_DOUBLE_EQ(flume::report::sample_quantile(v, 0.1), 1.3);
+  EXPECT_DOUBLE_EQ(flume::report::sample_quantile(v, 0.5), 2.5);
+  EXPECT_DOUBLE_EQ(flume::report::sample_quantile(v, 1.0), 4.0);
+  std::vector<double> none;
+  EXPECT_TRUE(std::isnan(flume::report::sample_quantile(none, 0.5)));
+}
+
+// Five records k + t (k = 0..4) on one time grid, and one that starts later: at each time the 50 % band is
+// the 25 and 75 % quantiles of the records covering it (1 + t and 3 + t while the sixth is absent).
+TEST(GaugeBand, QuantilesAtEachTimeOfTheRecordsCoveringIt) {
+  std::vector<flume::report::TimeSeries> r;
+  for (int k = 0; k < 5; ++k) r.push_back({{0, 1, 2}, {k + 0.0, k + 1.0, k + 2.0}});
+  r.push_back({{1.5, 2}, {100, 100}});  // covers t = 2 only of the first record's times
+  const auto b = flume::report::gauge_band(r, 0.5);
+  ASSERT_EQ(b.time.size(), 3u);
+  EXPECT_DOUBLE_EQ(b.lo[0], 1.0);
+  EXPECT_DOUBLE_EQ(b.median[0], 2.0);
+  EXPECT_DOUBLE_EQ(b.hi[1], 4.0);
+  // t = 2: values 2, 3, 4, 5, 6, 100: the 25 % quantile at h = 1.25 is 3.25, the median 4.5, the 75 % 5.75.
+  EXPECT_DOUBLE_EQ(b.lo[2], 3.25);
+  EXPECT_DOUBLE_EQ(b.median[2], 4.5);
+  EXPECT_DOUBLE_EQ(b.hi[2], 5.75);
+}
+
+}  // namespace
+
+// The two runs as a band with one of them on top: the band's peaks and arrivals are the quantiles of the
+// runs' own (0.1 and 0.08 m, 0.07 and 0.58 s), and the line keeps its own summary line.
+TEST_F(GaugesCli, BandOfRunsWithALineOnTop) {
+  const fs::path svg = dir_ / "band.svg";
+  const Result r = gauges({a(), b(), "--band", "--line", a() + "=reference", "--gauges", "WG1", "--out", svg.string()});
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_NE(r.out.find("WG1 band of 2 runs: peak median 0.0900 [0.0805, 0.0995] m, arrival in 2: median 0.325 "
+                       "[0.083, 0.567] s (95 % of the runs between the brackets)\n"),
+            std::string::npos)
+      << r.out;
+  EXPECT_NE(r.out.find("WG1 reference: peak 0.1000 m at 2.000 s"), std::string::npos) << r.out;
+  const std::string text = read_file(svg);
+  EXPECT_NE(text.find("95 % of 2 runs"), std::string::npos);
+  EXPECT_EQ(data_lines(panels(text)[0], flume::plot::palette(1).hex()), 1);  // the reference, after the band
+
+  EXPECT_EQ(gauges({a(), "--band", "--out", svg.string()}).rc, 2) << "a band needs two runs";
+  EXPECT_EQ(gauges({a(), b(), "--line", a(), "--out", svg.string()}).rc, 2) << "--line goes with --band";
+}
