@@ -29,7 +29,9 @@ const char* kUsage =
     "usage:\n"
     "  flume surrogate fit --db FILE --campaign NAME --metric M[,M2...] [--kind chaos|kriging|both] [--degree D]\n"
     "        [--folds K] [--holdout N | --validation CAMPAIGN] [--bootstrap B] [--thresholds t1,t2,...] [--seed S]\n"
-    "        [--force]\n"
+    "        [--given METRIC] [--force]\n"
+    "        runs that lack the metric (or METRIC, such as a gauge's arrival) are left out of the fit, and a\n"
+    "        classifier of where it exists is fitted and validated beside it\n"
     "  flume surrogate predict --db FILE --campaign NAME --metric M [--kind chaos|kriging] --at x1=v,x2=v [--at ...]\n"
     "  flume surrogate sobol --db FILE --campaign NAME --metric M      first and total Sobol' indices (chaos)\n"
     "  flume surrogate show --db FILE --campaign NAME                  the stored surrogates and their Q2\n"
@@ -43,7 +45,9 @@ const char* kUsage =
     "        optimal weights and with unit weights, two levels also by Giles' two-level Monte Carlo; each against\n"
     "        high runs alone for the same variance, and the optimal allocation\n"
     "  flume surrogate posterior --db FILE --calibration NAME --noise-m SIGMA [--samples N] [--seed S]\n"
-    "        posterior of a calibration's parameters by MCMC on a kriging surrogate of its misfit\n";
+    "        [--draws K --draws-out SPEC.json [--end-time S]]\n"
+    "        posterior of a calibration's parameters by MCMC on a kriging surrogate of its misfit; with --draws,\n"
+    "        a campaign spec of K posterior draws whose runs give the predictive band (flume gauges --band)\n";
 
 struct Args {
   std::string verb, db, campaign;
@@ -61,6 +65,8 @@ struct Args {
   std::string calibration;
   surrogate::PosteriorSettings posterior;
   bool has_noise = false;
+  std::string draws_out;
+  double end_time = 0;
 };
 
 std::vector<std::string> split(const std::string& s, char sep) {
@@ -117,6 +123,8 @@ Args parse_args(int argc, char** argv) {
       a.settings.holdout = parse_count(s, value(), 0, 1000000);
     } else if (s == "--validation") {
       a.settings.validation = value();
+    } else if (s == "--given") {
+      a.settings.given = value();
     } else if (s == "--bootstrap") {
       a.settings.bootstrap = parse_count(s, value(), 0, 100000);
     } else if (s == "--seed") {
@@ -148,6 +156,12 @@ Args parse_args(int argc, char** argv) {
     } else if (s == "--noise-m") {
       a.posterior.noise_m = parse_number(s, value(), 1e-9, 10);
       a.has_noise = true;
+    } else if (s == "--draws") {
+      a.posterior.draws = parse_count(s, value(), 2, 10000);
+    } else if (s == "--draws-out") {
+      a.draws_out = value();
+    } else if (s == "--end-time") {
+      a.end_time = parse_number(s, value(), 1e-3, 1e4);
     } else if (s == "--samples") {
       a.posterior.samples = parse_count(s, value(), 100, 10000000);
     } else if (s == "--low") {
@@ -196,7 +210,16 @@ void print_quality(const std::string& metric, const json& q, const char* state) 
   std::printf(", Q2 %zu-fold %s", q["folds"].get<std::size_t>(), fmt(q["q2_cv"]).c_str());
   if (q["n_holdout"].get<std::size_t>() > 0)
     std::printf(", Q2 on %zu held-back runs %s", q["n_holdout"].get<std::size_t>(), fmt(q["q2_holdout"]).c_str());
-  std::printf(", mean %.6g, std %.6g\n", q["mean"].get<double>(), q["std"].get<double>());
+  std::printf(", mean %.6g, std %.6g%s\n", q["mean"].get<double>(), q["std"].get<double>(),
+              q.contains("classifier") ? " (where it exists)" : "");
+  if (!q.contains("classifier")) return;
+  const json& c = q["classifier"];
+  std::printf("  where %s exists: %zu of %zu fitted runs; classifier accuracy leave-one-out %s",
+              q.value("given", q["metric"].get<std::string>()).c_str(), c["inside"].get<std::size_t>(),
+              c["inside"].get<std::size_t>() + c["outside"].get<std::size_t>(), fmt(c["accuracy_cv"]).c_str());
+  const std::size_t held = c["holdout_inside"].get<std::size_t>() + c["holdout_outside"].get<std::size_t>();
+  if (held > 0) std::printf(", on %zu held-back runs %s", held, fmt(c["accuracy_holdout"]).c_str());
+  std::printf(", P(exists) %s under the input law\n", fmt(c["p_inside"]).c_str());
 }
 
 int fit(const Args& a) {
@@ -309,7 +332,17 @@ int posterior(Args a) {
   if (!a.has_noise) throw InputError("command line", "--noise-m", "is required (the gauge noise, m)");
   a.posterior.seed = a.settings.seed;
   a.posterior.confidence = a.settings.confidence;
+  if (a.posterior.draws > 0 && a.draws_out.empty())
+    throw InputError("command line", "--draws-out", "is required with --draws (the campaign spec to write)");
+  if (a.posterior.draws == 0 && !a.draws_out.empty())
+    throw InputError("command line", "--draws", "is required with --draws-out (how many posterior draws, 2 to 10000)");
   const auto data = surrogate::load_calibration_misfit(a.db, a.calibration);
+  double end_time = a.end_time;
+  if (a.posterior.draws > 0 && end_time <= 0) {
+    const json spec = json::parse(data.spec_json);
+    end_time = spec.value("overrides", json::object()).value("solver.end_time", 0.0);
+    if (end_time <= 0) throw InputError("command line", "--end-time", "is required: the calibration sets no solver.end_time");
+  }
   const auto post = surrogate::misfit_posterior(data, a.posterior);
   std::printf("# posterior of '%s': %zu evaluations, misfit surrogate Q2 5-fold %.4f, noise %.4g m over %.0f "
               "residuals, %zu MCMC samples (acceptance %.2f)\nparameter,best,mean,median,lo,hi\n",
@@ -317,6 +350,13 @@ int posterior(Args a) {
               a.posterior.samples, post.acceptance);
   for (const auto& p : post.parameters)
     std::printf("%s,%.6g,%.6g,%.6g,%.6g,%.6g\n", p.name.c_str(), p.best, p.mean, p.median, p.lo, p.hi);
+  if (a.posterior.draws > 0) {
+    const std::string text = surrogate::predictive_spec(data, post, a.calibration, end_time);
+    std::ofstream f(a.draws_out);
+    if (!(f << text << "\n")) throw InputError(a.draws_out, "--draws-out", "cannot write the file");
+    std::printf("wrote %s: %zu posterior draws (run them with flume campaign run)\n", a.draws_out.c_str(),
+                post.draws.size());
+  }
   return kExitOk;
 }
 

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <filesystem>
 #include <map>
 #include <nlohmann/json.hpp>
 
@@ -50,6 +52,14 @@ Posterior misfit_posterior(const MisfitData& d, const PosteriorSettings& s) {
     OT::RandomGenerator::SetSeed(static_cast<OT::UnsignedInteger>(s.seed));
     const OT::Sample chain = sampler.getSample(s.samples);
     out.acceptance = sampler.getAcceptanceRate();
+    const std::size_t kept = std::min<std::size_t>(s.draws, chain.getSize());
+    for (std::size_t i = 0; i < kept; ++i) {
+      // The middle of each of `kept` equal stretches of the chain: far apart, so nearly independent.
+      const OT::Point u_i = chain[(2 * i + 1) * chain.getSize() / (2 * kept)];
+      std::vector<double> x;
+      for (std::size_t j = 0; j < p; ++j) x.push_back(d.lower[j] + u_i[j] * (d.upper[j] - d.lower[j]));
+      out.draws.push_back(std::move(x));
+    }
     const double a = (1 - s.confidence) / 2;
     for (std::size_t j = 0; j < p; ++j) {
       const OT::Sample m = chain.getMarginal(j);
@@ -69,6 +79,7 @@ MisfitData load_calibration_misfit(const std::string& db_file, const std::string
   const auto c = db.find_campaign(name);
   if (!c) throw InputError(db_file, "--calibration", "no calibration named '" + name + "'");
   MisfitData d;
+  d.spec_json = c->spec;
   const json spec = json::parse(c->spec);
   if (!spec.contains("parameters") || !spec.contains("objective"))
     throw InputError(db_file, "--calibration", "'" + name + "' is a campaign, not a calibration");
@@ -104,6 +115,35 @@ MisfitData load_calibration_misfit(const std::string& db_file, const std::string
                          " distinct evaluations; the misfit surrogate needs at least " +
                          std::to_string(2 * d.names.size() + 2) + " (run the calibration with its profile)");
   return d;
+}
+
+std::string predictive_spec(const MisfitData& d, const Posterior& post, const std::string& calibration,
+                            double end_time_s) {
+  using json = nlohmann::json;
+  const json spec = json::parse(d.spec_json);
+  if (!spec.contains("scene"))
+    throw InputError("command line", "--draws", "calibration '" + calibration + "' runs a stand-in model, not a scene");
+  const std::filesystem::path scene = spec["scene"].get<std::string>();
+  if (!std::filesystem::exists(scene))
+    throw InputError(scene.string(), "scene", "missing: the calibration's scene file is no longer there");
+  json overrides = spec.value("overrides", json::object());
+  overrides["solver.end_time"] = end_time_s;
+  json points = json::array();
+  for (std::size_t i = 0; i < post.draws.size(); ++i) {
+    char label[32];
+    std::snprintf(label, sizeof label, "draw-%03zu", i + 1);
+    json point = {{"label", label}};
+    for (std::size_t j = 0; j < d.names.size(); ++j)
+      if (d.names[j] != "objective.time_shift_s") point[d.names[j]] = post.draws[i][j];
+    points.push_back(point);
+  }
+  return json{{"name", calibration + "-predictive"},
+              {"description", "posterior draws of calibration '" + calibration +
+                                  "' (flume surrogate posterior --draws): their runs' spread is the predictive band"},
+              {"scene", std::filesystem::absolute(scene).lexically_normal().string()},
+              {"overrides", overrides},
+              {"design", {{"type", "list"}, {"points", points}}}}
+      .dump(2);
 }
 
 }  // namespace flume::surrogate

@@ -22,6 +22,7 @@ struct MisfitData {
   std::vector<std::vector<double>> points;  // parameter values of each evaluation
   std::vector<double> ssr;                  // its sum of squared residuals, m^2
   double n_residuals = 0;
+  std::string spec_json;  // the calibration's stored spec (its scene or model and overrides)
 };
 
 struct PosteriorSettings {
@@ -29,6 +30,7 @@ struct PosteriorSettings {
   std::size_t samples = 20000, burn_in = 2000;
   double confidence = 0.95;
   std::uint64_t seed = 1;
+  std::size_t draws = 0;  // posterior points kept for the predictive runs, evenly spaced along the chain
 };
 
 struct PosteriorParameter {
@@ -42,6 +44,7 @@ struct Posterior {
   std::size_t evaluations = 0;
   double acceptance = 0;
   double q2 = 0;  // k-fold Q2 of the misfit surrogate
+  std::vector<std::vector<double>> draws;  // in the parameters' units, `names` order
 };
 
 Posterior misfit_posterior(const MisfitData& data, const PosteriorSettings& settings);
@@ -49,5 +52,13 @@ Posterior misfit_posterior(const MisfitData& data, const PosteriorSettings& sett
 // The stored evaluations of calibration `name` (flume calibrate): failed evaluations are left out. Throws
 // flume::InputError naming the file for an unknown calibration or too few evaluations.
 MisfitData load_calibration_misfit(const std::string& db_file, const std::string& name);
+
+// The predictive runs: a campaign spec (list design, docs/campaign-spec.md) of the posterior draws on the
+// calibration's scene and overrides, `end_time_s` (> 0) replacing its simulated time, so that `flume campaign
+// run` gives the records whose spread is the predictive band (`flume gauges --band`). A time shift of the
+// comparison is not a scene value and is left out. Throws flume::InputError for a calibration of a stand-in
+// model or a scene file no longer there.
+std::string predictive_spec(const MisfitData& data, const Posterior& posterior, const std::string& calibration,
+                            double end_time_s);
 
 }  // namespace flume::surrogate

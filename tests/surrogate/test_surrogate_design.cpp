@@ -325,8 +325,10 @@ TEST(Posterior, LinearGaussianModelHasItsAnalyticPosterior) {
     }
   PosteriorSettings s;
   s.noise_m = sigma;
+  s.draws = 200;
   const Posterior p = misfit_posterior(d, s);
   ASSERT_EQ(p.parameters.size(), 2u);
+  ASSERT_EQ(p.draws.size(), 200u);
   const double sd[2] = {sd_a, sd_b}, mean[2] = {a_hat, b_hat};
   for (int j = 0; j < 2; ++j) {
     const auto& q = p.parameters[j];
@@ -335,6 +337,13 @@ TEST(Posterior, LinearGaussianModelHasItsAnalyticPosterior) {
     // MCMC error: 20000 correlated samples are worth a few hundred independent ones (0.1 sd).
     EXPECT_NEAR(q.mean, mean[j], 0.25 * sd[j]) << q.name;
     EXPECT_NEAR((q.hi - q.lo) / (2 * 1.959964 * sd[j]), 1.0, 0.15) << q.name;
+    // The draws for the predictive runs are the posterior's too: 200 of them, 100 chain steps apart, give
+    // its mean to 0.25 sd and its sd to 20 % (a standard error of 5 % if independent, more along a chain).
+    double m = 0, v = 0;
+    for (const auto& x : p.draws) m += x[j] / p.draws.size();
+    for (const auto& x : p.draws) v += (x[j] - m) * (x[j] - m) / (p.draws.size() - 1);
+    EXPECT_NEAR(m, mean[j], 0.25 * sd[j]) << q.name;
+    EXPECT_NEAR(std::sqrt(v) / sd[j], 1.0, 0.2) << q.name;
   }
   // Half the noise, half the width.
   s.noise_m = sigma / 2;
@@ -342,6 +351,32 @@ TEST(Posterior, LinearGaussianModelHasItsAnalyticPosterior) {
   for (int j = 0; j < 2; ++j)
     EXPECT_NEAR((half.parameters[j].hi - half.parameters[j].lo) / (p.parameters[j].hi - p.parameters[j].lo), 0.5,
                 0.1);
+}
+
+// The predictive runs' spec is a campaign spec `flume campaign run` accepts: one list point per draw on the
+// calibration's scene and overrides, the simulated time replaced, a time shift of the comparison left out.
+TEST(Posterior, PredictiveSpecIsACampaignOfTheDraws) {
+  const fs::path dir = flume::test::surrogate_test_dir();
+  { std::ofstream(dir / "scene.json") << "{}"; }
+  MisfitData d;
+  d.names = {"reservoir.forcing.t99_s", "objective.time_shift_s"};
+  d.spec_json = nlohmann::json{{"scene", (dir / "scene.json").string()},
+                               {"overrides", {{"solver.dx", 0.02}, {"solver.end_time", 2.2}}}}
+                    .dump();
+  Posterior post;
+  post.draws = {{0.8, 0.01}, {0.9, -0.02}, {0.85, 0.0}};
+  const auto spec = nlohmann::json::parse(predictive_spec(d, post, "exp", 6.0));
+  EXPECT_EQ(spec["name"], "exp-predictive");
+  EXPECT_EQ(spec["overrides"]["solver.end_time"].get<double>(), 6.0);
+  EXPECT_EQ(spec["overrides"]["solver.dx"].get<double>(), 0.02);
+  ASSERT_EQ(spec["design"]["points"].size(), 3u);
+  EXPECT_EQ(spec["design"]["points"][1]["label"], "draw-002");
+  EXPECT_EQ(spec["design"]["points"][1]["reservoir.forcing.t99_s"].get<double>(), 0.9);
+  EXPECT_FALSE(spec["design"]["points"][1].contains("objective.time_shift_s"));
+  fs::remove(dir / "scene.json");
+  EXPECT_THROW(predictive_spec(d, post, "exp", 6.0), flume::InputError) << "the scene is gone";
+  d.spec_json = R"({"model": "gauge"})";
+  EXPECT_THROW(predictive_spec(d, post, "exp", 6.0), flume::InputError) << "a stand-in model";
 }
 
 }  // namespace
