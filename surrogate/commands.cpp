@@ -214,7 +214,7 @@ void print_quality(const std::string& metric, const json& q, const char* state) 
               q.contains("classifier") ? " (where it exists)" : "");
   if (!q.contains("classifier")) return;
   const json& c = q["classifier"];
-  std::printf("  where %s exists: %zu of %zu fitted runs; classifier accuracy leave-one-out %s",
+  std::printf("  where %s exists: %zu of %zu runs; classifier accuracy cross-validated %s",
               q.value("given", q["metric"].get<std::string>()).c_str(), c["inside"].get<std::size_t>(),
               c["inside"].get<std::size_t>() + c["outside"].get<std::size_t>(), fmt(c["accuracy_cv"]).c_str());
   const std::size_t held = c["holdout_inside"].get<std::size_t>() + c["holdout_outside"].get<std::size_t>();
@@ -344,12 +344,21 @@ int posterior(Args a) {
     if (end_time <= 0) throw InputError("command line", "--end-time", "is required: the calibration sets no solver.end_time");
   }
   const auto post = surrogate::misfit_posterior(data, a.posterior);
-  std::printf("# posterior of '%s': %zu evaluations, misfit surrogate Q2 5-fold %.4f, noise %.4g m over %.0f "
-              "residuals, %zu MCMC samples (acceptance %.2f)\nparameter,best,mean,median,lo,hi\n",
-              a.calibration.c_str(), post.evaluations, post.q2, a.posterior.noise_m, data.n_residuals,
+  std::printf("# posterior of '%s': %zu evaluations, %zu near the best fitted by the misfit surrogate (Q2 "
+              "leave-one-out %.4f), noise %.4g m over %.0f residuals, %zu MCMC samples (acceptance %.2f)\n",
+              a.calibration.c_str(), post.evaluations, post.local, post.q2, a.posterior.noise_m, data.n_residuals,
               a.posterior.samples, post.acceptance);
+  if (post.best_rms > 2 * a.posterior.noise_m)
+    std::printf("# warning: the best misfit, RMS %.4g m, is %.1f times the noise: the residual is not the noise "
+                "alone (model error, or the optimizer stopped short), so these intervals are too narrow\n",
+                post.best_rms, post.best_rms / a.posterior.noise_m);
+  std::printf("parameter,best,mean,median,lo,hi\n");
   for (const auto& p : post.parameters)
     std::printf("%s,%.6g,%.6g,%.6g,%.6g,%.6g\n", p.name.c_str(), p.best, p.mean, p.median, p.lo, p.hi);
+  for (const auto& p : post.parameters)
+    if (p.cut)
+      std::printf("# warning: the interval of %s reaches the edge of the evaluated neighbourhood, which cuts it: "
+                  "evaluate around the optimum more widely (the calibration's profile span)\n", p.name.c_str());
   if (a.posterior.draws > 0) {
     const std::string text = surrogate::predictive_spec(data, post, a.calibration, end_time);
     std::ofstream f(a.draws_out);

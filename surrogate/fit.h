@@ -48,7 +48,7 @@ struct ExceedanceCurve {
 // The classifier of where a metric (or the fit's condition) exists, surrogate/classifier.h.
 struct ClassifierQuality {
   std::size_t inside = 0, outside = 0;  // training runs of each class
-  double accuracy_cv = 0;               // leave-one-out: the share of training runs classified right
+  double accuracy_cv = 0;  // the share of training runs classified right, leave-one-out (20-fold over 200)
   std::size_t holdout_inside = 0, holdout_outside = 0;
   double accuracy_holdout = 0;  // on the held-back runs; NaN without any
   double p_inside = 0;          // P(inside) under the input law (Monte Carlo on the classifier)

@@ -103,12 +103,13 @@ std::vector<OT::FunctionalChaosResult> chaos_replicates(const OT::FunctionalChao
   return out;
 }
 
-OT::KrigingResult fit_kriging(const OT::Sample& x, const OT::Sample& y) {
+namespace {
+OT::KrigingResult fit_kriging_with(const OT::Sample& x, const OT::Sample& y, const OT::Basis& trend) {
   const std::size_t d = x.getDimension();
   OT::Point scale = x.computeStandardDeviation();
   for (auto& s : scale) s = s > 0 ? s : 1.0;
   const OT::MaternModel covariance(scale, OT::Point(1, std::max(y.computeStandardDeviation()[0], 1e-12)), 2.5);
-  OT::KrigingAlgorithm algo(x, y, covariance, OT::ConstantBasisFactory(d).build());
+  OT::KrigingAlgorithm algo(x, y, covariance, trend);
   // Scales searched up to 10 times the range of the runs (a flat direction is a long scale).
   OT::Point lower(d, 1e-2), upper(d);
   const OT::Point range = x.getMax() - x.getMin();
@@ -120,9 +121,18 @@ OT::KrigingResult fit_kriging(const OT::Sample& x, const OT::Sample& y) {
   algo.run();
   return algo.getResult();
 }
+}  // namespace
+
+OT::KrigingResult fit_kriging(const OT::Sample& x, const OT::Sample& y) {
+  return fit_kriging_with(x, y, OT::ConstantBasisFactory(x.getDimension()).build());
+}
+
+OT::KrigingResult fit_kriging_quadratic_trend(const OT::Sample& x, const OT::Sample& y) {
+  return fit_kriging_with(x, y, OT::QuadraticBasisFactory(x.getDimension()).build());
+}
 
 OT::KrigingResult refit_kriging(const OT::KrigingResult& fitted, const OT::Sample& x, const OT::Sample& y) {
-  OT::KrigingAlgorithm algo(x, y, fitted.getCovarianceModel(), OT::ConstantBasisFactory(x.getDimension()).build());
+  OT::KrigingAlgorithm algo(x, y, fitted.getCovarianceModel(), fitted.getBasisCollection()[0]);
   algo.setOptimizeParameters(false);
   algo.run();
   return algo.getResult();

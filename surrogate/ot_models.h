@@ -31,7 +31,11 @@ std::vector<OT::FunctionalChaosResult> chaos_replicates(const OT::FunctionalChao
 
 // Kriging with a constant trend and a Matern 5/2 covariance, its scales and amplitude by maximum likelihood.
 OT::KrigingResult fit_kriging(const OT::Sample& x, const OT::Sample& y);
-// The same covariance (scales, amplitude) on other runs: cross-validation folds and adaptive batches.
+// The same with a quadratic trend (universal kriging): for a function known to be near a quadratic, such as
+// a misfit near its minimum, whose extrapolation should follow the quadratic rather than fall to the mean.
+OT::KrigingResult fit_kriging_quadratic_trend(const OT::Sample& x, const OT::Sample& y);
+// The same covariance (scales, amplitude) and trend basis on other runs: cross-validation folds and adaptive
+// batches.
 OT::KrigingResult refit_kriging(const OT::KrigingResult& fitted, const OT::Sample& x, const OT::Sample& y);
 
 // A result as OpenTURNS' XML study text, and back.

@@ -13,41 +13,70 @@
 
 namespace flume::surrogate {
 
+namespace {
+
+// The neighbourhood of the best evaluation the surrogate is fitted to: a log-likelihood drop of 50 is far
+// beyond any credible region (3 for a 95 % region of two parameters).
+constexpr double kLocalLogLikelihood = 50;
+std::size_t min_local(std::size_t p) { return posterior_min_evaluations(p); }
+
+}  // namespace
+
 Posterior misfit_posterior(const MisfitData& d, const PosteriorSettings& s) {
-  const std::size_t p = d.names.size(), n = d.ssr.size();
+  const std::size_t p = d.names.size(), n_all = d.ssr.size();
   Posterior out;
-  out.evaluations = n;
+  out.evaluations = n_all;
   try {
-    OT::Sample u(n, p);
-    for (std::size_t i = 0; i < n; ++i)
-      for (std::size_t j = 0; j < p; ++j) u(i, j) = (d.points[i][j] - d.lower[j]) / (d.upper[j] - d.lower[j]);
-    const OT::Sample y = detail::to_column(d.ssr);
-    const OT::KrigingResult k = detail::fit_kriging(u, y);
+    std::vector<std::size_t> order(n_all);
+    for (std::size_t i = 0; i < n_all; ++i) order[i] = i;
+    std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return d.ssr[a] < d.ssr[b]; });
+    const double cut = d.ssr[order[0]] + kLocalLogLikelihood * 2 * s.noise_m * s.noise_m;
+    std::size_t n = 0;
+    while (n < n_all && (d.ssr[order[n]] <= cut || n < min_local(p))) ++n;
+    if (n < min_local(p))
+      throw InputError("calibration", "evaluations",
+                       std::to_string(n_all) + " distinct evaluations; the misfit surrogate needs at least " +
+                           std::to_string(min_local(p)) + " (run the calibration with its profile)");
+    out.local = n;
+    out.best_rms = std::sqrt(d.ssr[order[0]] / std::max(d.n_residuals, 1.0));
+    OT::Sample u(n, p), y(n, 1);
+    for (std::size_t i = 0; i < n; ++i) {
+      for (std::size_t j = 0; j < p; ++j)
+        u(i, j) = (d.points[order[i]][j] - d.lower[j]) / (d.upper[j] - d.lower[j]);
+      y(i, 0) = d.ssr[order[i]];
+    }
+    const OT::KrigingResult k = detail::fit_kriging_quadratic_trend(u, y);
     {
-      // Out-of-fold check of the misfit surrogate (5 folds, the covariance kept).
+      // Leave-one-out check of the misfit surrogate (the covariance and trend basis kept).
       double mean = y.computeMean()[0], sse = 0, sst = 0;
-      OT::KFoldSplitter splitter(n, std::min<std::size_t>(5, n));
-      for (std::size_t f = 0; f < std::min<std::size_t>(5, n); ++f) {
-        OT::Indices test;
-        const OT::Indices train = splitter.generate(test);
-        const OT::Sample yp = detail::refit_kriging(k, u.select(train), y.select(train)).getMetaModel()(u.select(test));
-        for (std::size_t i = 0; i < test.getSize(); ++i) {
-          sse += std::pow(yp(i, 0) - y(test[i], 0), 2);
-          sst += std::pow(y(test[i], 0) - mean, 2);
-        }
+      for (std::size_t i = 0; i < n; ++i) {
+        OT::Indices rest;
+        for (std::size_t j = 0; j < n; ++j)
+          if (j != i) rest.add(j);
+        const double yp = detail::refit_kriging(k, u.select(rest), y.select(rest)).getMetaModel()(u[i])[0];
+        sse += std::pow(yp - y(i, 0), 2);
+        sst += std::pow(y(i, 0) - mean, 2);
       }
       out.q2 = sst > 0 ? 1 - sse / sst : std::nan("");
     }
-    // log pi(u) = -SSR(u) / (2 sigma^2) on the unit box (uniform prior).
+    // log pi(u) = -SSR(u) / (2 sigma^2), uniform prior, on the part of the unit box the surrogate knows: the
+    // box its evaluations span, widened by that span on every side (beyond, a quadratic fitted to a few
+    // points may turn down and draw the chain to a corner).
     const OT::Function::FunctionCollection terms(1, k.getMetaModel());
     const OT::LinearCombinationFunction log_pdf(terms, OT::Point(1, -0.5 / (s.noise_m * s.noise_m)));
-    const std::size_t best = static_cast<std::size_t>(
-        std::min_element(d.ssr.begin(), d.ssr.end()) - d.ssr.begin());
-    OT::Point start = u[best];
-    for (auto& v : start) v = std::clamp(v, 1e-9, 1 - 1e-9);
-    // Proposal: a step of 2 % of each range, adapted by OpenTURNS towards its target acceptance rate.
-    OT::RandomWalkMetropolisHastings sampler(log_pdf, OT::Interval(p), start,
-                                              OT::Normal(OT::Point(p, 0.0), OT::Point(p, 0.02)));
+    const std::size_t best = order[0];
+    OT::Point lo = u.getMin(), hi = u.getMax(), step(p);
+    for (std::size_t j = 0; j < p; ++j) {
+      const double span = std::max(hi[j] - lo[j], 1e-6);
+      lo[j] = std::max(0.0, lo[j] - span);
+      hi[j] = std::min(1.0, hi[j] + span);
+      step[j] = 0.02 * (hi[j] - lo[j]);
+    }
+    OT::Point start = u[0];
+    for (std::size_t j = 0; j < p; ++j) start[j] = std::clamp(start[j], lo[j] + 1e-9 * (hi[j] - lo[j]), hi[j] - 1e-9 * (hi[j] - lo[j]));
+    // Proposal: a step of 2 % of the support, adapted by OpenTURNS towards its target acceptance rate.
+    OT::RandomWalkMetropolisHastings sampler(log_pdf, OT::Interval(lo, hi), start,
+                                              OT::Normal(OT::Point(p, 0.0), step));
     sampler.setBurnIn(s.burn_in);
     OT::RandomGenerator::SetSeed(static_cast<OT::UnsignedInteger>(s.seed));
     const OT::Sample chain = sampler.getSample(s.samples);
@@ -66,6 +95,10 @@ Posterior misfit_posterior(const MisfitData& d, const PosteriorSettings& s) {
       auto phys = [&](double v) { return d.lower[j] + v * (d.upper[j] - d.lower[j]); };
       out.parameters.push_back({d.names[j], d.points[best][j], phys(m.computeMean()[0]), phys(m.computeMedian()[0]),
                                 phys(m.computeQuantile(a)[0]), phys(m.computeQuantile(1 - a)[0])});
+      // An interval within 1 % of a support edge that is not a bound of the calibration is cut by the support.
+      const double margin = 0.01 * (hi[j] - lo[j]);
+      out.parameters.back().cut = (lo[j] > 0 && m.computeQuantile(a)[0] < lo[j] + margin) ||
+                                  (hi[j] < 1 && m.computeQuantile(1 - a)[0] > hi[j] - margin);
     }
   } catch (const OT::Exception& e) {
     detail::rethrow(e);
@@ -109,11 +142,12 @@ MisfitData load_calibration_misfit(const std::string& db_file, const std::string
     d.points.push_back(x);
     d.ssr.push_back(ssr);
   }
-  if (d.points.size() < 2 * d.names.size() + 2)
+  if (d.points.size() < posterior_min_evaluations(d.names.size()))
     throw InputError(db_file, "--calibration",
                      "'" + name + "' has " + std::to_string(d.points.size()) +
                          " distinct evaluations; the misfit surrogate needs at least " +
-                         std::to_string(2 * d.names.size() + 2) + " (run the calibration with its profile)");
+                         std::to_string(posterior_min_evaluations(d.names.size())) +
+                         " (run the calibration with its profile)");
   return d;
 }
 
@@ -129,6 +163,10 @@ std::string predictive_spec(const MisfitData& d, const Posterior& post, const st
   json overrides = spec.value("overrides", json::object());
   overrides["solver.end_time"] = end_time_s;
   json points = json::array();
+  json optimum = {{"label", "optimum"}};  // the best evaluation, run over the same time as the draws
+  for (const auto& p : post.parameters)
+    if (p.name != "objective.time_shift_s") optimum[p.name] = p.best;
+  points.push_back(optimum);
   for (std::size_t i = 0; i < post.draws.size(); ++i) {
     char label[32];
     std::snprintf(label, sizeof label, "draw-%03zu", i + 1);

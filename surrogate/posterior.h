@@ -5,8 +5,12 @@
 //               log L(theta) = -SSR(theta) / (2 sigma^2) + const,  SSR = sum of squared residuals over the
 //               n samples of every target record (n RMS^2, RMS the calibration's stored term)
 //   prior       uniform on the calibration's bounds
-//   surrogate   kriging of SSR over the stored evaluations (every optimizer and profile point), in unit
-//               coordinates of the bounds
+//   surrogate   kriging of SSR with a quadratic trend (a least-squares misfit is a quadratic bowl near its
+//               minimum) over the evaluations near the best one (every optimizer and profile point whose SSR
+//               is within 50 * 2 sigma^2 of the least: a log-likelihood drop of 50; at least
+//               posterior_min_evaluations of the lowest), in
+//               unit coordinates of the bounds. Far from the minimum the misfit spans orders of magnitude a
+//               stationary surrogate cannot follow: fitted there too, it invents minima the chain falls into.
 // Gauge residuals are correlated in time, so with the full sample count the intervals are optimistic; the
 // noise model's sigma (or an effective n) is the user's statement of how much the records constrain.
 #pragma once
@@ -37,15 +41,22 @@ struct PosteriorParameter {
   std::string name;
   double best = 0;  // the evaluation with the least misfit
   double mean = 0, median = 0, lo = 0, hi = 0;
+  bool cut = false;  // the interval reaches the edge of where the surrogate has evaluations: evaluate wider
 };
 
 struct Posterior {
   std::vector<PosteriorParameter> parameters;
   std::size_t evaluations = 0;
   double acceptance = 0;
-  double q2 = 0;  // k-fold Q2 of the misfit surrogate
+  double q2 = 0;  // leave-one-out Q2 of the misfit surrogate over its (local) evaluations
+  std::size_t local = 0;  // evaluations the surrogate is fitted to
+  double best_rms = 0;    // the least misfit's RMS, m: well above the noise means model error or no optimum
   std::vector<std::vector<double>> draws;  // in the parameters' units, `names` order
 };
+
+// The evaluations a misfit surrogate of p parameters needs: a quadratic's (p + 1)(p + 2) / 2 coefficients and
+// p + 1 more for the kriging of what it leaves.
+inline std::size_t posterior_min_evaluations(std::size_t p) { return (p + 1) * (p + 2) / 2 + p + 1; }
 
 Posterior misfit_posterior(const MisfitData& data, const PosteriorSettings& settings);
 
@@ -53,7 +64,8 @@ Posterior misfit_posterior(const MisfitData& data, const PosteriorSettings& sett
 // flume::InputError naming the file for an unknown calibration or too few evaluations.
 MisfitData load_calibration_misfit(const std::string& db_file, const std::string& name);
 
-// The predictive runs: a campaign spec (list design, docs/campaign-spec.md) of the posterior draws on the
+// The predictive runs: a campaign spec (list design, docs/campaign-spec.md) of the optimum (the best
+// evaluation, labelled "optimum") and the posterior draws ("draw-001", ...) on the
 // calibration's scene and overrides, `end_time_s` (> 0) replacing its simulated time, so that `flume campaign
 // run` gives the records whose spread is the predictive band (`flume gauges --band`). A time shift of the
 // comparison is not a scene value and is left out. Throws flume::InputError for a calibration of a stand-in

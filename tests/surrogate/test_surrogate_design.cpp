@@ -364,15 +364,19 @@ TEST(Posterior, PredictiveSpecIsACampaignOfTheDraws) {
                                {"overrides", {{"solver.dx", 0.02}, {"solver.end_time", 2.2}}}}
                     .dump();
   Posterior post;
+  post.parameters = {{"reservoir.forcing.t99_s", 0.82}, {"objective.time_shift_s", 0.0}};
   post.draws = {{0.8, 0.01}, {0.9, -0.02}, {0.85, 0.0}};
   const auto spec = nlohmann::json::parse(predictive_spec(d, post, "exp", 6.0));
   EXPECT_EQ(spec["name"], "exp-predictive");
   EXPECT_EQ(spec["overrides"]["solver.end_time"].get<double>(), 6.0);
   EXPECT_EQ(spec["overrides"]["solver.dx"].get<double>(), 0.02);
-  ASSERT_EQ(spec["design"]["points"].size(), 3u);
-  EXPECT_EQ(spec["design"]["points"][1]["label"], "draw-002");
-  EXPECT_EQ(spec["design"]["points"][1]["reservoir.forcing.t99_s"].get<double>(), 0.9);
-  EXPECT_FALSE(spec["design"]["points"][1].contains("objective.time_shift_s"));
+  ASSERT_EQ(spec["design"]["points"].size(), 4u);
+  EXPECT_EQ(spec["design"]["points"][0]["label"], "optimum");
+  EXPECT_EQ(spec["design"]["points"][0]["reservoir.forcing.t99_s"].get<double>(), 0.82);
+  EXPECT_EQ(spec["design"]["points"][2]["label"], "draw-002");
+  EXPECT_EQ(spec["design"]["points"][2]["reservoir.forcing.t99_s"].get<double>(), 0.9);
+  EXPECT_FALSE(spec["design"]["points"][2].contains("objective.time_shift_s"));
+  EXPECT_FALSE(spec["design"]["points"][0].contains("objective.time_shift_s"));
   fs::remove(dir / "scene.json");
   EXPECT_THROW(predictive_spec(d, post, "exp", 6.0), flume::InputError) << "the scene is gone";
   d.spec_json = R"({"model": "gauge"})";
