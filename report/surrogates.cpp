@@ -59,7 +59,7 @@ SurrogateSummary parse(const store::SurrogateRecord& rec) {
     w << "where " << q.value("given", s.metric) << " exists (" << k.at("inside").get<std::size_t>() << " of "
       << k.at("inside").get<std::size_t>() + k.at("outside").get<std::size_t>()
       << " runs); the classifier of where judges " << fmt(k.at("accuracy_cv").get<double>())
-      << " of the runs right by leave-one-out";
+      << " of the runs right cross-validated";
     if (held > 0) w << " and " << fmt(number_or_nan(k.at("accuracy_holdout"))) << " of " << held << " held back";
     w << ", and puts P(exists) at " << fmt(k.at("p_inside").get<double>());
     s.condition = w.str();
