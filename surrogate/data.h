@@ -28,7 +28,8 @@ struct TrainingData {
   // of where it holds (surrogate/fit.h). Without one, the runs that lack the metric itself are "outside".
   std::string given;
   std::vector<std::vector<double>> x_outside;
-  std::size_t outside_held_back = 0;  // the last ones of x_outside are held-back runs (--validation)
+  std::size_t outside_held_back = 0;  // the last ones of x_outside are held-back runs (--validation; with
+                                      // --holdout every outside run trains the classifier)
 };
 
 // Throws flume::InputError naming the file and the option for an unknown campaign or metric (or condition), a

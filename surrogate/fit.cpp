@@ -217,8 +217,12 @@ FitResult fit_surrogate(const TrainingData& data, const FitSettings& s) {
     if (outside_train > 0) {
       const auto split = data.x_outside.begin() + static_cast<long>(outside_train);
       const std::vector<std::vector<double>> xh(data.x.begin() + static_cast<long>(n), data.x.end());
-      r.classifier = classify_inside(xt, {data.x_outside.begin(), split}, xh, {split, data.x_outside.end()}, joint,
-                                     s.mc_size, s.seed);
+      try {
+        r.classifier = classify_inside(xt, {data.x_outside.begin(), split}, xh, {split, data.x_outside.end()}, joint,
+                                       s.mc_size, s.seed);
+      } catch (const OT::Exception&) {
+        // An indicator OpenTURNS cannot fit (runs nearly repeated): the fit stands, without a classifier.
+      }
     }
   } catch (const OT::Exception& e) {
     detail::rethrow(e);
