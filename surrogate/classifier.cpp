@@ -58,9 +58,10 @@ ClassifierQuality classify_inside(const std::vector<std::vector<double>>& inside
         static_cast<double>(count_right(classifier(detail::to_sample(xh)), lh)) / static_cast<double>(xh.size());
   }
   OT::RandomGenerator::SetSeed(static_cast<OT::UnsignedInteger>(seed + 404));
-  const OT::Sample at = joint.getSample(mc_size);
-  std::vector<double> all_inside(at.getSize(), 1.0);
-  q.p_inside = static_cast<double>(count_right(classifier(at), all_inside)) / static_cast<double>(at.getSize());
+  const OT::Sample judged = classifier(joint.getSample(mc_size));
+  std::size_t inside_count = 0;
+  for (OT::UnsignedInteger i = 0; i < judged.getSize(); ++i) inside_count += judged(i, 0) > 0.5;
+  q.p_inside = static_cast<double>(inside_count) / static_cast<double>(judged.getSize());
   return q;
 }
 

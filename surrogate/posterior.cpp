@@ -18,7 +18,6 @@ namespace {
 // The neighbourhood of the best evaluation the surrogate is fitted to: a log-likelihood drop of 50 is far
 // beyond any credible region (3 for a 95 % region of two parameters).
 constexpr double kLocalLogLikelihood = 50;
-std::size_t min_local(std::size_t p) { return posterior_min_evaluations(p); }
 
 }  // namespace
 
@@ -32,11 +31,11 @@ Posterior misfit_posterior(const MisfitData& d, const PosteriorSettings& s) {
     std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return d.ssr[a] < d.ssr[b]; });
     const double cut = d.ssr[order[0]] + kLocalLogLikelihood * 2 * s.noise_m * s.noise_m;
     std::size_t n = 0;
-    while (n < n_all && (d.ssr[order[n]] <= cut || n < min_local(p))) ++n;
-    if (n < min_local(p))
+    while (n < n_all && (d.ssr[order[n]] <= cut || n < posterior_min_evaluations(p))) ++n;
+    if (n < posterior_min_evaluations(p))
       throw InputError("calibration", "evaluations",
                        std::to_string(n_all) + " distinct evaluations; the misfit surrogate needs at least " +
-                           std::to_string(min_local(p)) + " (run the calibration with its profile)");
+                           std::to_string(posterior_min_evaluations(p)) + " (run the calibration with its profile)");
     out.local = n;
     out.best_rms = std::sqrt(d.ssr[order[0]] / std::max(d.n_residuals, 1.0));
     OT::Sample u(n, p), y(n, 1);

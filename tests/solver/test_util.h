@@ -88,4 +88,6 @@ inline std::unique_ptr<Simulation> gpu(const Scene& s) {
 // order, nvcc's arithmetic) with the CPU. The same CUDA source runs on the host against the CPU in every build
 // (the CudaEmulation tests); bench/run_gpu_bench.sh runs these where a GPU is lent.
 #define SKIP_WITHOUT_DEVICE() \
-  if (!::flume::cuda_available()) GTEST_SKIP() << "no CUDA device (or flume built without CUDA)"
+  if (!::flume::cuda_available())                                                                         \
+  GTEST_SKIP() << "no CUDA device (or flume built without CUDA): this test compares execution on a GPU with "  \
+                  "the CPU; the same CUDA source is checked on the host by CudaEmulation.*"
