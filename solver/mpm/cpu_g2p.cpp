@@ -11,6 +11,16 @@
 
 namespace flume::mpm {
 
+// Copies n <= N values: a full batch (all but a block's last) by a copy of constant size, which the compiler
+// does in a few vector moves instead of a library call.
+template <int N, typename T>
+inline void copy_batch(const T* from, int n, T* to) {
+  if (n == N)
+    std::copy_n(from, N, to);
+  else
+    std::copy_n(from, n, to);
+}
+
 // G2P: new velocity, affine matrix, J (with J-bar mixing) and position; checks for blow-up.
 template <int D, typename T>
 void MpmSolver<D, T>::g2p(T dt) {
@@ -53,7 +63,9 @@ void MpmSolver<D, T>::g2p(T dt) {
     const bool near_debris =
         debris_ && debris_->near_particle_block(blocks_.pkeys[p], 2 * dx_, grid_lo_, dx_);
     double* push_slots = near_debris ? debris_->block_slots(p) : nullptr;
-    T vmax2_b = 0, ke_b = 0, pe_b = 0, el_b = 0;
+    // The audit's sums per batch position (summed over the block at its end): a sum across the batch would
+    // be a floating-point reduction, which the compiler keeps in order and does not vectorise.
+    alignas(64) T vmax2_l[kBatch] = {}, ke_l[kBatch] = {}, pe_l[kBatch] = {}, el_l[kBatch] = {};
     // Gather the tile around this block: per node the velocity, then (free nodes only) strain, fill and
     // weight.
     alignas(64) T tg[kTileNodes * kLanes];
@@ -75,8 +87,11 @@ void MpmSolver<D, T>::g2p(T dt) {
     mpm::for_each_box_row<D>(tile_box_[p], [&](int a, int len) {
       for (int k = 0; k < len; ++k) fetch(a + k);
     });
-    // The stencil weights of a batch of particles first, in a loop of their own; then the gather and update
-    // one particle at a time.
+    // Per batch of particles, five passes: the stencil weights; the gather, one particle at a time (vector
+    // lanes are a node's channels); the strain update and the move across the batch (lanes are particles);
+    // the rare branches (the constraint's work, the symmetry image, the debris push-out), one particle at a
+    // time; the checks and the audit's sums across the batch. The batch lives in local arrays, which the
+    // compiler knows alias nothing, so the passes across the batch vectorise.
     for (uint32_t b0 = blocks_.pstart[p]; b0 < blocks_.pstart[p + 1]; b0 += kBatch) {
       const int nb = static_cast<int>(std::min<uint32_t>(kBatch, blocks_.pstart[p + 1] - b0));
       alignas(64) T bw[D][3][kBatch], bf[D][kBatch];
@@ -91,8 +106,9 @@ void MpmSolver<D, T>::g2p(T dt) {
           for (int c = 0; c < 3; ++c) bw[d][c][j] = w[c];
         }
       }
+      alignas(64) T bv[D][kBatch], bC[D * D][kBatch], bJg[kBatch], bFg[kBatch], bws[kBatch];
+      alignas(64) T rows[kBatch][D + 1][kLanes];
       for (int j = 0; j < nb; ++j) {
-        const uint32_t i = b0 + j;
         T w[D][3], f[D];
         int rel[D];
         for (int d = 0; d < D; ++d) {
@@ -106,77 +122,138 @@ void MpmSolver<D, T>::g2p(T dt) {
         Lane S = Lane::Zero(), M[D];
         for (int b = 0; b < D; ++b) M[b] = Lane::Zero();
         if constexpr (D == 2) {
+#pragma GCC unroll 3
           for (int i0 = 0; i0 < 3; ++i0) {
             const T* n = tg + ((rel[0] + i0) * kTile + rel[1]) * kLanes;
             const Lane n1 = ConstLaneMap(n + kLanes), n2 = ConstLaneMap(n + 2 * kLanes);
             const Lane r = w[1][0] * ConstLaneMap(n) + w[1][1] * n1 + w[1][2] * n2;
             const Lane r1 = w[1][1] * n1 + (T(2) * w[1][2]) * n2;
             S += w[0][i0] * r;
-            M[0] += (T(i0) * w[0][i0]) * r;
+            if (i0 > 0) M[0] += (T(i0) * w[0][i0]) * r;
             M[1] += w[0][i0] * r1;
           }
         } else {
+          // Terms at offset 0 are left out rather than multiplied by zero (the loops are unrolled, so the test
+          // is decided at compile time).
+#pragma GCC unroll 3
           for (int i0 = 0; i0 < 3; ++i0) {
             Lane S1 = Lane::Zero(), M1 = Lane::Zero(), M2 = Lane::Zero();
+#pragma GCC unroll 3
             for (int i1 = 0; i1 < 3; ++i1) {
               const T* n = tg + (((rel[0] + i0) * kTile + rel[1] + i1) * kTile + rel[2]) * kLanes;
               const Lane n1 = ConstLaneMap(n + kLanes), n2 = ConstLaneMap(n + 2 * kLanes);
               const Lane r = w[2][0] * ConstLaneMap(n) + w[2][1] * n1 + w[2][2] * n2;
               const Lane r2 = w[2][1] * n1 + (T(2) * w[2][2]) * n2;
               S1 += w[1][i1] * r;
-              M1 += (T(i1) * w[1][i1]) * r;
+              if (i1 > 0) M1 += (T(i1) * w[1][i1]) * r;
               M2 += w[1][i1] * r2;
             }
             S += w[0][i0] * S1;
-            M[0] += (T(i0) * w[0][i0]) * S1;
+            if (i0 > 0) M[0] += (T(i0) * w[0][i0]) * S1;
             M[1] += w[0][i0] * M1;
             M[2] += w[0][i0] * M2;
           }
         }
-        T vn[D], Cn[D * D];
+        // The columns of C as lane vectors; the batch arrays take them apart below.
+        LaneMap{rows[j][0]} = S;
+        for (int b = 0; b < D; ++b) LaneMap{rows[j][1 + b]} = ((M[b] - f[b] * S) * dx) * cscale;
+      }
+      for (int j = 0; j < nb; ++j) {
         for (int a = 0; a < D; ++a) {
-          vn[a] = S[a];
-          for (int b = 0; b < D; ++b) Cn[a * D + b] = (M[b][a] - f[b] * S[a]) * dx;
+          bv[a][j] = rows[j][0][a];
+          for (int b = 0; b < D; ++b) bC[a * D + b][j] = rows[j][1 + b][a];
         }
-        const T Jg = S[D], Fg = S[D + 1], wsum = S[D + 2];
-        for (int k = 0; k < D * D; ++k) Cn[k] *= cscale;
-        T xp[D];
-        for (int d = 0; d < D; ++d) xp[d] = x_[d][i];
-        T e = e_[i];
-        fill_work += mpm::g2p_particle<D>(g2p_k, Jg, Fg, wsum, vol_[i], e, xp, vn, Cn);
-        e_[i] = e;
+        bJg[j] = rows[j][0][D];
+        bFg[j] = rows[j][0][D + 1];
+        bws[j] = rows[j][0][D + 2];
+      }
+      // The strain update and the move (mpm::g2p_particle's first steps), across the batch.
+      alignas(64) T bx[D][kBatch], be[kBatch], bej[kBatch], bvol[kBatch];
+      for (int d = 0; d < D; ++d) copy_batch<kBatch>(x_[d].data() + b0, nb, bx[d]);
+      copy_batch<kBatch>(e_.data() + b0, nb, be);
+      copy_batch<kBatch>(vol_.data() + b0, nb, bvol);
+      for (int j = 0; j < nb; ++j) {
+        T xp[D], Cn[D * D];
+        for (int d = 0; d < D; ++d) xp[d] = bx[d][j];
+        for (int k = 0; k < D * D; ++k) Cn[k] = bC[k][j];
+        be[j] = mpm::g2p_strain<D>(g2p_k, bJg[j], bFg[j], bws[j], be[j], xp, Cn, bej[j]);
+        for (int d = 0; d < D; ++d) bx[d][j] = xp[d] + dt * bv[d][j];
+      }
+      // The rare branches, one particle at a time.
+      for (int j = 0; j < nb; ++j)
+        if (be[j] != bej[j]) fill_work += mpm::constraint_work<D>(g2p_k, bvol[j], bej[j], be[j]);
+      if (has_sym_)
+        for (int j = 0; j < nb; ++j) {
+          T xp[D], vn[D], Cn[D * D];
+          for (int d = 0; d < D; ++d) {
+            xp[d] = bx[d][j];
+            vn[d] = bv[d][j];
+          }
+          for (int k = 0; k < D * D; ++k) Cn[k] = bC[k][j];
+          mpm::symmetry_reflect_particle<D>(sym_, xp, vn, Cn);  // carried across: its image instead
+          for (int d = 0; d < D; ++d) {
+            bx[d][j] = xp[d];
+            bv[d][j] = vn[d];
+          }
+          for (int k = 0; k < D * D; ++k) bC[k][j] = Cn[k];
+        }
+      for (int d = 0; d < D; ++d) {
+        copy_batch<kBatch>(bx[d], nb, x_[d].data() + b0);
+        copy_batch<kBatch>(bv[d], nb, v_[d].data() + b0);
+      }
+      for (int k = 0; k < D * D; ++k) copy_batch<kBatch>(bC[k], nb, C_[k].data() + b0);
+      copy_batch<kBatch>(be, nb, e_.data() + b0);
+      if (near_debris) {
+        for (int j = 0; j < nb; ++j) debris_->push_out(x_, v_, rho_ * double(bvol[j]), b0 + j, push_slots);
+        for (int d = 0; d < D; ++d) {
+          copy_batch<kBatch>(x_[d].data() + b0, nb, bx[d]);
+          copy_batch<kBatch>(v_[d].data() + b0, nb, bv[d]);
+        }
+      }
+      // The checks and the audit's sums, across the batch: per block in T (the audit's slack is 1 % of the
+      // energy scale; a float block sum is good to 1e-6 of it), then in double across blocks. A particle
+      // that fails a check stops the run, so the sums need not leave it out.
+      alignas(64) int flags[kBatch];  // 1: the particle failed a check; 2: its strain is beyond the series
+      for (int j = 0; j < nb; ++j) {
         T v2 = 0, gx = 0;
-        bool finite = std::isfinite(e) && e > T(-1);
-        bool inside = true;
+        // `&` rather than `&&`: short-circuit branches would keep the loop scalar.
+        bool ok = std::isfinite(be[j]) & (be[j] > T(-1));
         for (int d = 0; d < D; ++d) {
-          v_[d][i] = vn[d];
-          x_[d][i] = xp[d];
-        }
-        if (near_debris) debris_->push_out(x_, v_, rho_ * double(vol_[i]), i, push_slots);
-        for (int d = 0; d < D; ++d) {
-          const T xn = x_[d][i], vd = v_[d][i];
-          finite &= std::isfinite(xn) && std::isfinite(vd);
-          inside &= xn >= T(lo_ok[d]) && xn <= T(hi_ok[d]);
+          const T xn = bx[d][j], vd = bv[d][j];
+          ok &= std::isfinite(xn) & std::isfinite(vd) & (xn >= T(lo_ok[d])) & (xn <= T(hi_ok[d]));
           v2 += vd * vd;
           gx += grav[d] * xn;
         }
-        for (int k = 0; k < D * D; ++k) C_[k][i] = Cn[k];
-        if (!finite || !inside) {
+        const bool series = law.in_series(be[j]);
+        flags[j] = (ok ? 0 : 1) | (series ? 0 : 2);
+        const T V = bvol[j];
+        vmax2_l[j] = std::max(vmax2_l[j], v2);
+        ke_l[j] += V * v2;
+        pe_l[j] -= V * gx;
+        const T w = law.energy_series(be[j]);  // formed for every particle, kept where it holds
+        el_l[j] += V * (series ? w : T(0));
+      }
+      int any = 0;
+      for (int j = 0; j < nb; ++j) any |= flags[j];
+      if (any & 2)  // strains beyond the series' reach: the exact law
+        for (int j = 0; j < nb; ++j)
+          if (!law.in_series(be[j])) el_l[j] += bvol[j] * law.energy_exact(be[j]);
+      if (any & 1)
+        for (int j = 0; j < nb; ++j) {
+          bool finite = std::isfinite(be[j]) && be[j] > T(-1), inside = true;
+          for (int d = 0; d < D; ++d) {
+            finite &= std::isfinite(bx[d][j]) && std::isfinite(bv[d][j]);
+            inside &= bx[d][j] >= T(lo_ok[d]) && bx[d][j] <= T(hi_ok[d]);
+          }
+          if (finite && inside) continue;
+          const long i = static_cast<long>(b0) + j;
 #pragma omp critical(flume_bad_particle)
-          if (static_cast<long>(i) < bad) {
-            bad = static_cast<long>(i);
+          if (i < bad) {
+            bad = i;
             bad_kind = finite ? 2 : 1;
           }
-          continue;
+          break;
         }
-        // The audit's sums, per block in T (the audit's slack is 1 % of the energy scale; a float block sum
-        // is good to 1e-6 of it) and then in double across blocks.
-        const T V = vol_[i];
-        vmax2_b = std::max(vmax2_b, v2);
-        ke_b += V * v2;
-        pe_b -= V * gx;
-        el_b += V * law.energy_density(e);
-      }
     }
     {  // a particle drifted out of the tile margin: re-sort before the next scatter
       const T* xs[D];
@@ -184,6 +261,13 @@ void MpmSolver<D, T>::g2p(T dt) {
       int lo[D], hi[D];
       mpm::stencil_base_range<D>(xs, blocks_.pstart[p], blocks_.pstart[p + 1], lo_grid, inv_dx, lo, hi);
       for (int d = 0; d < D; ++d) resort |= lo[d] - origin[d] < 0 || hi[d] - origin[d] > kBlock + 1;
+    }
+    T vmax2_b = 0, ke_b = 0, pe_b = 0, el_b = 0;
+    for (int j = 0; j < kBatch; ++j) {
+      vmax2_b = std::max(vmax2_b, vmax2_l[j]);
+      ke_b += ke_l[j];
+      pe_b += pe_l[j];
+      el_b += el_l[j];
     }
     vmax2 = std::max(vmax2, double(vmax2_b));
     ke += 0.5 * rho * double(ke_b);

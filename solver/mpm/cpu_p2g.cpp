@@ -120,32 +120,42 @@ void MpmSolver<D, T>::p2g(T dt) {
           for (int a = 1; a < D; ++a) slope[b] += bslope[b][a][j] * unit[1 + a];
         }
         if constexpr (D == 2) {
-          for (int i0 = 0; i0 < 3; ++i0) {
-            const Lane r0 = at0 + T(i0) * slope[0];
+#pragma GCC unroll 3
+          for (int i0 = 0; i0 < 3; ++i0) {  // offset-0 terms left out, as in 3D below
+            const Lane r0 = i0 == 0 ? at0 : Lane(at0 + T(i0) * slope[0]);
             const int row = (brel[0][j] + i0) * kTile + brel[1][j];
+#pragma GCC unroll 3
             for (int i1 = 0; i1 < 3; ++i1)
-              LaneMap(tile + (row + i1) * kLanes) += (bw[0][i0][j] * bw[1][i1][j]) * (r0 + T(i1) * slope[1]);
+              LaneMap(tile + (row + i1) * kLanes) +=
+                  (bw[0][i0][j] * bw[1][i1][j]) * (i1 == 0 ? r0 : Lane(r0 + T(i1) * slope[1]));
           }
         } else {
           // Node (i0, i1, i2) receives w0 w1 w2 (at0 + i0 s0 + i1 s1 + i2 s2). The last axis' weight goes
           // into the vectors once per particle (P, Q0, Q1 below), so that a node costs one vector
           // multiply-add to form its value and one to add it, with no scalar weight product and broadcast per
           // node.
+          // The offset-0 terms are left out rather than multiplied by zero (the compiler may not drop x * 0):
+          // the loops are unrolled, so `i == 0` is decided at compile time.
           Lane P[3], Q0[3], Q1[3];
+#pragma GCC unroll 3
           for (int i2 = 0; i2 < 3; ++i2) {
             const T w2 = bw[2][i2][j];
-            P[i2] = w2 * (at0 + T(i2) * slope[2]);
+            P[i2] = w2 * (i2 == 0 ? at0 : Lane(at0 + T(i2) * slope[2]));
             Q0[i2] = w2 * slope[0];
             Q1[i2] = w2 * slope[1];
           }
+#pragma GCC unroll 3
           for (int i0 = 0; i0 < 3; ++i0) {
             Lane R0[3];
-            for (int i2 = 0; i2 < 3; ++i2) R0[i2] = P[i2] + T(i0) * Q0[i2];
+#pragma GCC unroll 3
+            for (int i2 = 0; i2 < 3; ++i2) R0[i2] = i0 == 0 ? P[i2] : Lane(P[i2] + T(i0) * Q0[i2]);
+#pragma GCC unroll 3
             for (int i1 = 0; i1 < 3; ++i1) {
               const T w01 = bw[0][i0][j] * bw[1][i1][j];
               const int row = ((brel[0][j] + i0) * kTile + brel[1][j] + i1) * kTile + brel[2][j];
+#pragma GCC unroll 3
               for (int i2 = 0; i2 < 3; ++i2)
-                LaneMap(tile + (row + i2) * kLanes) += w01 * (R0[i2] + T(i1) * Q1[i2]);
+                LaneMap(tile + (row + i2) * kLanes) += w01 * (i1 == 0 ? R0[i2] : Lane(R0[i2] + T(i1) * Q1[i2]));
             }
           }
         }

@@ -38,31 +38,44 @@ struct G2pConstants {
   SymmetryPlane sym;
 };
 
-// G2P, one particle, from what it gathered: velocity vn, APIC matrix Cn (scaled, dv_a/dx_b), and over the
-// free (non-wall) nodes of its stencil the weighted sums of strain Jg, fill Fg and weight wsum. Updates the
-// strain e by the well-balanced J-bar and the volume constraint, then moves x. The grid average leaves out
-// nodes that a wall set: their strain is an average over particles on one side only, and the discrete
-// equilibrium next to a wall is not the linear field the average preserves, so mixing them in would drive a
-// slow creep that never settles. The remaining nodes are renormalised; a particle with no free node in reach
-// keeps its own J (psi = 0). A particle carried across a symmetry plane is replaced by its image. Returns the
-// elastic energy the constraint supplied (J; what it removes is dissipation and is not returned): the energy
-// audit counts it as supplied.
+// G2P's strain update, one particle, from what it gathered over the free (non-wall) nodes of its stencil:
+// the weighted sums of strain Jg, fill Fg and weight wsum, and the APIC matrix Cn (scaled, dv_a/dx_b).
+// Returns the new strain e by the well-balanced J-bar and the volume constraint; e_jbar is the strain before
+// the constraint (mpm::constraint_work). The grid average leaves out nodes that a wall set: their strain is an
+// average over particles on one side only, and the discrete equilibrium next to a wall is not the linear field
+// the average preserves, so mixing them in would drive a slow creep that never settles. The remaining nodes
+// are renormalised; a particle with no free node in reach keeps its own J (psi = 0). Branch-free (both
+// quotients are formed and one kept), so that the CPU runs it across a batch of particles in SIMD lanes.
+template <int D, typename T>
+FLUME_HD T g2p_strain(const G2pConstants<D, T>& k, T Jg, T Fg, T wsum, T e, const T* x, const T* Cn, T& e_jbar) {
+  const T psi = k.psi;  // read unconditionally: a load under the condition below would not vectorise
+  const bool have_grid = wsum > T(1e-3);
+  const T e_grid = (have_grid ? Jg / wsum : T(0)) + hydrostatic_strain<D>(x, k.slope);
+  e_jbar = jbar_update(e, e_grid, volume_change<D>(Cn, k.dt), have_grid ? psi : T(0));
+  const T corrected = fill_correction(e_jbar, Fg / wsum, k.fill_rate, k.fill_tol);
+  return have_grid ? corrected : e_jbar;
+}
+
+// The elastic energy (J) the volume constraint supplied to a particle of reference volume vol when it moved
+// the strain from e_jbar to e_new; what it removes is dissipation and is not returned. The energy audit counts
+// it as supplied. In double, from the exact law: the difference of two nearby energies.
+template <int D, typename T>
+FLUME_HD double constraint_work(const G2pConstants<D, T>& k, T vol, T e_jbar, T e_new) {
+  if (e_new == e_jbar) return 0.0;
+  const double work =
+      double(vol) * (k.law_d.energy_density(double(e_new)) - k.law_d.energy_density(double(e_jbar)));
+  return work > 0.0 ? work : 0.0;
+}
+
+// G2P, one particle, from what it gathered: velocity vn, APIC matrix Cn and the free-node sums (g2p_strain).
+// Updates the strain e, then moves x; a particle carried across a symmetry plane is replaced by its image.
+// Returns the constraint's work (constraint_work). The CPU runs the same three steps batch by batch.
 template <int D, typename T>
 FLUME_HD double g2p_particle(const G2pConstants<D, T>& k, T Jg, T Fg, T wsum, T vol, T& e, T* x, T* vn,
                              T* Cn) {
-  const bool have_grid = wsum > T(1e-3);
-  const T e_grid = (have_grid ? Jg / wsum : T(0)) + hydrostatic_strain<D>(x, k.slope);
-  T e_new = jbar_update(e, e_grid, volume_change<D>(Cn, k.dt), have_grid ? k.psi : T(0));
-  double work = 0;
-  if (have_grid) {
-    const T corrected = fill_correction(e_new, Fg / wsum, k.fill_rate, k.fill_tol);
-    if (corrected != e_new) {
-      work =
-          double(vol) * (k.law_d.energy_density(double(corrected)) - k.law_d.energy_density(double(e_new)));
-      work = work > 0.0 ? work : 0.0;
-    }
-    e_new = corrected;
-  }
+  T e_jbar;
+  const T e_new = g2p_strain<D>(k, Jg, Fg, wsum, e, x, Cn, e_jbar);
+  const double work = constraint_work<D>(k, vol, e_jbar, e_new);
   e = e_new;
   for (int d = 0; d < D; ++d) x[d] += k.dt * vn[d];
   if (k.has_sym) symmetry_reflect_particle<D>(k.sym, x, vn, Cn);  // carried across: its image instead
