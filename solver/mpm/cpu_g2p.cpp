@@ -66,6 +66,12 @@ void MpmSolver<D, T>::g2p(T dt) {
     // The audit's sums per batch position (summed over the block at its end): a sum across the batch would
     // be a floating-point reduction, which the compiler keeps in order and does not vectorise.
     alignas(64) T vmax2_l[kBatch] = {}, ke_l[kBatch] = {}, pe_l[kBatch] = {}, el_l[kBatch] = {};
+    // And the block's lowest and highest new position per axis, for the re-sort check at its end.
+    alignas(64) T xlo_l[D][kBatch], xhi_l[D][kBatch];
+    for (int d = 0; d < D; ++d) {
+      std::fill_n(xlo_l[d], kBatch, std::numeric_limits<T>::max());
+      std::fill_n(xhi_l[d], kBatch, std::numeric_limits<T>::lowest());
+    }
     // Gather the tile around this block: per node the velocity, then (free nodes only) strain, fill and
     // weight.
     alignas(64) T tg[kTileNodes * kLanes];
@@ -223,6 +229,8 @@ void MpmSolver<D, T>::g2p(T dt) {
           ok &= std::isfinite(xn) & std::isfinite(vd) & (xn >= T(lo_ok[d])) & (xn <= T(hi_ok[d]));
           v2 += vd * vd;
           gx += grav[d] * xn;
+          xlo_l[d][j] = std::min(xlo_l[d][j], xn);
+          xhi_l[d][j] = std::max(xhi_l[d][j], xn);
         }
         const bool series = law.in_series(be[j]);
         flags[j] = (ok ? 0 : 1) | (series ? 0 : 2);
@@ -255,12 +263,17 @@ void MpmSolver<D, T>::g2p(T dt) {
           break;
         }
     }
-    {  // a particle drifted out of the tile margin: re-sort before the next scatter
-      const T* xs[D];
-      for (int d = 0; d < D; ++d) xs[d] = x_[d].data();
-      int lo[D], hi[D];
-      mpm::stencil_base_range<D>(xs, blocks_.pstart[p], blocks_.pstart[p + 1], lo_grid, inv_dx, lo, hi);
-      for (int d = 0; d < D; ++d) resort |= lo[d] - origin[d] < 0 || hi[d] - origin[d] > kBlock + 1;
+    // A particle drifted out of the tile margin: re-sort before the next scatter. The stencil base is a
+    // non-decreasing function of the position, so the extreme positions give the extreme bases.
+    for (int d = 0; d < D; ++d) {
+      T xlo = std::numeric_limits<T>::max(), xhi = std::numeric_limits<T>::lowest(), f;
+      for (int j = 0; j < kBatch; ++j) {
+        xlo = std::min(xlo, xlo_l[d][j]);
+        xhi = std::max(xhi, xhi_l[d][j]);
+      }
+      const int lo = mpm::stencil_base((xlo - lo_grid[d]) * inv_dx, f);
+      const int hi = mpm::stencil_base((xhi - lo_grid[d]) * inv_dx, f);
+      resort |= lo - origin[d] < 0 || hi - origin[d] > kBlock + 1;
     }
     T vmax2_b = 0, ke_b = 0, pe_b = 0, el_b = 0;
     for (int j = 0; j < kBatch; ++j) {
