@@ -113,7 +113,6 @@ void MpmSolver<D, T>::g2p(T dt) {
         }
       }
       alignas(64) T bv[D][kBatch], bC[D * D][kBatch], bJg[kBatch], bFg[kBatch], bws[kBatch];
-      alignas(64) T rows[kBatch][D + 1][kLanes];
       for (int j = 0; j < nb; ++j) {
         T w[D][3], f[D];
         int rel[D];
@@ -160,18 +159,14 @@ void MpmSolver<D, T>::g2p(T dt) {
             M[2] += w[0][i0] * M2;
           }
         }
-        // The columns of C as lane vectors; the batch arrays take them apart below.
-        LaneMap{rows[j][0]} = S;
-        for (int b = 0; b < D; ++b) LaneMap{rows[j][1 + b]} = ((M[b] - f[b] * S) * dx) * cscale;
-      }
-      for (int j = 0; j < nb; ++j) {
-        for (int a = 0; a < D; ++a) {
-          bv[a][j] = rows[j][0][a];
-          for (int b = 0; b < D; ++b) bC[a * D + b][j] = rows[j][1 + b][a];
+        for (int b = 0; b < D; ++b) {  // column b of C, as a lane vector
+          const Lane Cb = ((M[b] - f[b] * S) * dx) * cscale;
+          for (int a = 0; a < D; ++a) bC[a * D + b][j] = Cb[a];
         }
-        bJg[j] = rows[j][0][D];
-        bFg[j] = rows[j][0][D + 1];
-        bws[j] = rows[j][0][D + 2];
+        for (int a = 0; a < D; ++a) bv[a][j] = S[a];
+        bJg[j] = S[D];
+        bFg[j] = S[D + 1];
+        bws[j] = S[D + 2];
       }
       // The strain update and the move (mpm::g2p_particle's first steps), across the batch.
       alignas(64) T bx[D][kBatch], be[kBatch], bej[kBatch], bvol[kBatch];
