@@ -504,12 +504,19 @@ FLUME_HD int symmetry_side(const SymmetryPlane& s, int i) {
 // The sign that reflection gives grid channel c (mass, momentum D, strain, volume): -1 for the normal momentum.
 FLUME_HD int symmetry_channel_sign(const SymmetryPlane& s, int c) { return c == 1 + s.axis ? -1 : 1; }
 
+// Whether a particle at coordinate xa along the plane's axis lies beyond the plane.
+template <typename T>
+FLUME_HD bool symmetry_beyond(const SymmetryPlane& s, T xa) {
+  const T d = xa - T(s.at);
+  return s.sign > 0 ? d < T(0) : d > T(0);
+}
+
 // Replaces a particle that lies beyond the plane by its image: position, velocity and APIC matrix reflected.
 template <int D, typename T>
 FLUME_HD void symmetry_reflect_particle(const SymmetryPlane& s, T* x, T* v, T* C) {
   const int a = s.axis;
+  if (!symmetry_beyond(s, x[a])) return;
   const T at = T(s.at), d = x[a] - at;
-  if (!(s.sign > 0 ? d < T(0) : d > T(0))) return;
   x[a] = at - d;
   v[a] = -v[a];
   for (int b = 0; b < D; ++b) {

@@ -185,6 +185,7 @@ void MpmSolver<D, T>::g2p(T dt) {
         if (be[j] != bej[j]) fill_work += mpm::constraint_work<D>(g2p_k, bvol[j], bej[j], be[j]);
       if (has_sym_)
         for (int j = 0; j < nb; ++j) {
+          if (!mpm::symmetry_beyond(sym_, bx[sym_.axis][j])) continue;  // most particles: nothing to copy
           T xp[D], vn[D], Cn[D * D];
           for (int d = 0; d < D; ++d) {
             xp[d] = bx[d][j];
