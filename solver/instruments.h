@@ -177,7 +177,7 @@ class InstrumentSet {
       if (due(probes_[k], t, force)) {
         auto& ts = record_.probes[probes_[k].name];
         ts.time.push_back(t);
-        double v[3];
+        double v[3] = {0, 0, 0};  // probe_velocity fills the first D
         probe_velocity(s, scene_.instruments.probes[k].position, v);
         for (int d = 0; d < D; ++d) ts.values.push_back(v[d]);
       }
