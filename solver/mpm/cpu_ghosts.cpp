@@ -12,11 +12,12 @@ namespace flume::mpm {
 template <int D, typename T>
 void GhostReflection<D, T>::reflect(GridNodes<D, T>& grid, const std::vector<uint64_t>& gkeys,
                                     std::vector<double>& load_impulse) {
-  // Each thread's list is in node order already (a dynamic schedule hands a thread its chunks in increasing
-  // order), so merging the lists suffices.
+  // Each thread's list is in node order already (a thread works through its shares of the grid blocks in
+  // increasing order), so merging the lists suffices.
   all_.clear();
   const auto by_node = [](const Ghost<D, T>& a, const Ghost<D, T>& b) { return a.idx < b.idx; };
-  for (const auto& list : ghosts_) {
+  for (const auto& tl : ghosts_) {
+    const auto& list = tl.list;
     const auto mid = static_cast<std::ptrdiff_t>(all_.size());
     all_.insert(all_.end(), list.begin(), list.end());
     std::inplace_merge(all_.begin(), all_.begin() + mid, all_.end(), by_node);

@@ -28,7 +28,7 @@ class GhostReflection {
   void set_push_axes(unsigned axes) { push_axes_ = axes; }
   // Before the grid update: one empty list per thread (each thread clears its own).
   void begin(int nthreads) { ghosts_.resize(nthreads); }
-  std::vector<Ghost<D, T>>* thread_list(int thread) { return &ghosts_[thread]; }
+  std::vector<Ghost<D, T>>* thread_list(int thread) { return &ghosts_[thread].list; }
   // The exchanges. The normal part of each mirror's change (the image's push) is its wall's load, added to
   // load_impulse (D per wall); other than that no load: the exchange is internal to the water.
   void reflect(GridNodes<D, T>& grid, const std::vector<uint64_t>& gkeys, std::vector<double>& load_impulse);
@@ -40,8 +40,11 @@ class GhostReflection {
   };
   static constexpr size_t kNoMirror = ~size_t(0);
   unsigned push_axes_ = 0;
-  std::vector<std::vector<Ghost<D, T>>> ghosts_;  // per thread: this step's ghost nodes
-  std::vector<Ghost<D, T>> all_;                  // all of them, in node order
+  struct alignas(64) ThreadList {
+    std::vector<Ghost<D, T>> list;
+  };
+  std::vector<ThreadList> ghosts_;       // per thread: this step's ghost nodes
+  std::vector<Ghost<D, T>> all_;         // all of them, in node order
   std::vector<MirrorChange> mirror_dv_;  // the mirrors' velocity changes, applied after every exchange
 };
 

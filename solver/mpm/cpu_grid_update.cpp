@@ -59,71 +59,74 @@ void MpmSolver<D, T>::update_node(const Lane& acc, long g, size_t idx, const int
 template <int D, typename T>
 void MpmSolver<D, T>::grid_update(T dt) {
   const T inv_cell_volume = T(1) / T(std::pow(dx_, D));
-  const long ngb = static_cast<long>(blocks_.gkeys.size());
   const int nthreads = omp_get_max_threads();
-  std::vector<double> impulse(static_cast<size_t>(nthreads) * walls_.size() * D, 0.0);
+  // Each thread's load sums on cache lines of their own (shared lines cost a transfer per wall node).
+  const size_t stride = (walls_.size() * D + 7) / 8 * 8;
+  std::vector<double> impulse(static_cast<size_t>(nthreads) * stride, 0.0);
   if (debris_) debris_->begin_grid(nthreads);
   ghosts_.begin(nthreads);
 #pragma omp parallel
   {
-    double* my_impulse = impulse.data() + static_cast<size_t>(omp_get_thread_num()) * walls_.size() * D;
+    double* my_impulse = impulse.data() + static_cast<size_t>(omp_get_thread_num()) * stride;
     std::vector<CouplingNode>* my_coupling = debris_ ? debris_->thread_nodes(omp_get_thread_num()) : nullptr;
     std::vector<Ghost<D, T>>* my_ghosts = ghosts_.thread_list(omp_get_thread_num());
     my_ghosts->clear();
-#pragma omp for schedule(dynamic, 8)
-    for (long g = 0; g < ngb; ++g) {
-      Lane acc[kNodes];
-      for (int k = 0; k < kNodes; ++k) acc[k] = Lane::Zero();
-      for (int o = 0; o < kNbr; ++o) {
-        const int32_t p = blocks_.g_nbr[g * kNbr + o];
-        if (p < 0) continue;
-        // Block offset of the particle block relative to this grid block, per axis.
-        int off[D];
-        for (int d = D - 1, r = o; d >= 0; --d, r /= 3) off[d] = -((r % 3) - 1);
-        // Local node l of this block is tile node a = l + 1 + kBlock * off on each axis.
-        int lo[D], hi[D];
-        const TileBox& box = tile_box_[p];
-        bool empty = false;
-        for (int d = 0; d < D; ++d) {
-          const int shift = 1 + kBlock * off[d];
-          lo[d] = std::max(0, box.lo[d] - shift);
-          hi[d] = std::min(kBlock, box.hi[d] - shift);
-          empty |= lo[d] >= hi[d];
-        }
-        if (empty) continue;
-        const T* tile = &tiles_[static_cast<size_t>(p) * kLanes * kTileNodes];
-        if constexpr (D == 2) {
-          for (int l0 = lo[0]; l0 < hi[0]; ++l0)
-            for (int l1 = lo[1]; l1 < hi[1]; ++l1) {
-              const int a = (l0 + 1 + kBlock * off[0]) * kTile + l1 + 1 + kBlock * off[1];
-              acc[l0 * kBlock + l1] += ConstLaneMap(tile + a * kLanes);
-            }
-        } else {
-          for (int l0 = lo[0]; l0 < hi[0]; ++l0)
-            for (int l1 = lo[1]; l1 < hi[1]; ++l1)
-              for (int l2 = lo[2]; l2 < hi[2]; ++l2) {
-                const int a = ((l0 + 1 + kBlock * off[0]) * kTile + l1 + 1 + kBlock * off[1]) * kTile + l2 +
-                              1 + kBlock * off[2];
-                acc[(l0 * kBlock + l1) * kBlock + l2] += ConstLaneMap(tile + a * kLanes);
+    const int nshares = shares_.count();
+#pragma omp for schedule(static, 1)
+    for (int s = 0; s < nshares; ++s)
+      for (long g = shares_.gfirst[s]; g < shares_.gfirst[s + 1]; ++g) {
+        Lane acc[kNodes];
+        for (int k = 0; k < kNodes; ++k) acc[k] = Lane::Zero();
+        for (int o = 0; o < kNbr; ++o) {
+          const int32_t p = blocks_.g_nbr[g * kNbr + o];
+          if (p < 0) continue;
+          // Block offset of the particle block relative to this grid block, per axis.
+          int off[D];
+          for (int d = D - 1, r = o; d >= 0; --d, r /= 3) off[d] = -((r % 3) - 1);
+          // Local node l of this block is tile node a = l + 1 + kBlock * off on each axis.
+          int lo[D], hi[D];
+          const TileBox& box = tile_box_[p];
+          bool empty = false;
+          for (int d = 0; d < D; ++d) {
+            const int shift = 1 + kBlock * off[d];
+            lo[d] = std::max(0, box.lo[d] - shift);
+            hi[d] = std::min(kBlock, box.hi[d] - shift);
+            empty |= lo[d] >= hi[d];
+          }
+          if (empty) continue;
+          const T* tile = &tiles_[static_cast<size_t>(p) * kLanes * kTileNodes];
+          if constexpr (D == 2) {
+            for (int l0 = lo[0]; l0 < hi[0]; ++l0)
+              for (int l1 = lo[1]; l1 < hi[1]; ++l1) {
+                const int a = (l0 + 1 + kBlock * off[0]) * kTile + l1 + 1 + kBlock * off[1];
+                acc[l0 * kBlock + l1] += ConstLaneMap(tile + a * kLanes);
               }
+          } else {
+            for (int l0 = lo[0]; l0 < hi[0]; ++l0)
+              for (int l1 = lo[1]; l1 < hi[1]; ++l1)
+                for (int l2 = lo[2]; l2 < hi[2]; ++l2) {
+                  const int a = ((l0 + 1 + kBlock * off[0]) * kTile + l1 + 1 + kBlock * off[1]) * kTile + l2 +
+                                1 + kBlock * off[2];
+                  acc[(l0 * kBlock + l1) * kBlock + l2] += ConstLaneMap(tile + a * kLanes);
+                }
+          }
+        }
+        int blk[D];
+        unpack_key<D>(blocks_.gkeys[g], blk);
+        const size_t base = static_cast<size_t>(g) * kNodes;
+        const bool near_debris = debris_ && debris_->near_grid_block(blk, grid_lo_, dx_);
+        const int slot = has_sym_ ? zone_.slot(g) : -1;
+        for (int k = 0; k < kNodes; ++k) {
+          int node[D];
+          for (int d = D - 1, r = k; d >= 0; --d, r /= kBlock) node[d] = blk[d] * kBlock + r % kBlock;
+          if (slot >= 0 && zone_.in_zone(node[sym_.axis])) {  // folded across the plane first, updated after
+            sym_acc_[static_cast<size_t>(slot) * kNodes + k] = acc[k];
+            continue;
+          }
+          update_node(acc[k], g, base + k, node, near_debris, 1.0, dt, inv_cell_volume, my_impulse,
+                      my_coupling, my_ghosts);
         }
       }
-      int blk[D];
-      unpack_key<D>(blocks_.gkeys[g], blk);
-      const size_t base = static_cast<size_t>(g) * kNodes;
-      const bool near_debris = debris_ && debris_->near_grid_block(blk, grid_lo_, dx_);
-      const int slot = has_sym_ ? zone_.slot(g) : -1;
-      for (int k = 0; k < kNodes; ++k) {
-        int node[D];
-        for (int d = D - 1, r = k; d >= 0; --d, r /= kBlock) node[d] = blk[d] * kBlock + r % kBlock;
-        if (slot >= 0 && zone_.in_zone(node[sym_.axis])) {  // folded across the plane first, updated after
-          sym_acc_[static_cast<size_t>(slot) * kNodes + k] = acc[k];
-          continue;
-        }
-        update_node(acc[k], g, base + k, node, near_debris, 1.0, dt, inv_cell_volume, my_impulse, my_coupling,
-                    my_ghosts);
-      }
-    }
     if (has_sym_) {
       // After the barrier every raw node near the plane is stored. The nodes on the modelled side and on the
       // plane take their fold (what the whole would give them) and are updated; a load on the plane is half
@@ -154,8 +157,7 @@ void MpmSolver<D, T>::grid_update(T dt) {
   }
   std::fill(load_impulse_.begin(), load_impulse_.end(), 0.0);
   for (int t = 0; t < nthreads; ++t)
-    for (size_t k = 0; k < load_impulse_.size(); ++k)
-      load_impulse_[k] += impulse[t * load_impulse_.size() + k];
+    for (size_t k = 0; k < load_impulse_.size(); ++k) load_impulse_[k] += impulse[t * stride + k];
   ghosts_.reflect(grid_, blocks_.gkeys, load_impulse_);
   if (has_sym_) mirror_beyond_symmetry();
   if (debris_) debris_->couple(grid_.v, double(dt));

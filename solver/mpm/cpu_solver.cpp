@@ -112,6 +112,8 @@ void MpmSolver<D, T>::fit_to_blocks() {
   grid_.resize(blocks_.gkeys.size() * kNodes);
   tiles_.resize(blocks_.pkeys.size() * kLanes * kTileNodes);
   tile_box_.resize(blocks_.pkeys.size());
+  shares_.split(blocks_.pstart, blocks_.pkeys, blocks_.gkeys, omp_get_max_threads());
+  boxes_current_ = false;
   needs_sort_ = false;
 }
 
@@ -119,6 +121,7 @@ void MpmSolver<D, T>::fit_to_blocks() {
 template <int D, typename T>
 void MpmSolver<D, T>::apply_inflow(double t0, double t1) {
   const auto change = inflow_->apply(t0, t1);
+  boxes_current_ = false;  // it moved the buffer's particles
   run_.energy0 += change.energy;
   n_ = x_[0].size();
   if (change.structural) run_.mass = water_mass(vol_, rho_);

@@ -10,7 +10,7 @@
 // (set-up, the step, inflow, the factory), cpu_p2g.cpp, cpu_grid_update.cpp (node update, symmetry fold),
 // cpu_g2p.cpp, cpu_boundaries.cpp (walls, symmetry mirror), cpu_checkpoint.cpp (checkpoint, energy audit,
 // diagnostics). Parts with state of their own: BlockGrid (sort and block lists), GhostReflection
-// (cpu_ghosts.h), CpuDebris (cpu_debris.h), SymmetryZone (symmetry_zone.h).
+// (cpu_ghosts.h), CpuDebris (cpu_debris.h), SymmetryZone (symmetry_zone.h), ThreadShares (thread_shares.h).
 #pragma once
 #include <Eigen/Core>
 #include <cstdint>
@@ -29,6 +29,7 @@
 #include "solver/mpm/node_k.h"
 #include "solver/mpm/run_state.h"
 #include "solver/mpm/symmetry_zone.h"
+#include "solver/mpm/thread_shares.h"
 #include "solver/mpm/tiles.h"
 #include "solver/mpm_kernels.h"
 #include "solver/simulation.h"
@@ -53,7 +54,8 @@ class MpmSolver final : public Simulation, private SceneConstants<D, T> {
   using ConstLaneMap = Eigen::Map<const Lane>;
   using TileBox = mpm::TileBox<D>;
   using K = SceneConstants<D, T>;  // the scene's constants (constants.h)
-  using K::dx_, K::inv_dx_, K::grid_lo_, K::gravity_, K::mu_, K::psi_, K::law_, K::law_d_, K::strain_slope_, K::c_;
+  using K::dx_, K::inv_dx_, K::grid_lo_, K::gravity_, K::mu_, K::psi_, K::law_, K::law_d_, K::strain_slope_,
+      K::c_;
 
  public:
   MpmSolver(const Scene& scene, const SimulationOptions& options);  // cpu_solver.cpp
@@ -130,9 +132,11 @@ class MpmSolver final : public Simulation, private SceneConstants<D, T> {
   // The block grid, the tiles and the nodes.
   BlockGrid<D, T> blocks_;
   bool needs_sort_ = true;
-  std::vector<TileBox> tile_box_;  // per particle block, from P2G; read by the grid gather and by G2P
+  std::vector<TileBox> tile_box_;  // per particle block: read by the grid gather and by G2P
+  bool boxes_current_ = false;     // tile_box_ fits the present positions (G2P leaves them for P2G)
   std::vector<T> tiles_;           // per particle block, kLanes x kTileNodes: P2G's private scatter
   GridNodes<D, T> grid_;
+  ThreadShares shares_;  // each thread's particle and grid blocks, the same in every stage (thread_shares.h)
 
   // Boundaries: walls, the domain box, ghosts, the symmetry plane, loads.
   std::vector<Wall<D, T>> walls_;
@@ -152,7 +156,7 @@ class MpmSolver final : public Simulation, private SceneConstants<D, T> {
   // The clock, the audit and the run's state.
   enum Stage { kStageSort, kStageP2g, kStageGrid, kStageG2p, kStageOther, kStages };
   double stage_s_[kStages] = {};  // wall seconds per stage of the steps so far (stage_seconds)
-  RunState run_;  // the clock, the audit's budget, the status (run_state.h)
+  RunState run_;                  // the clock, the audit's budget, the status (run_state.h)
 };
 
 }  // namespace flume::mpm

@@ -69,6 +69,22 @@ void stencil_base_range(const T* const* x, uint32_t begin, uint32_t end, const T
   }
 }
 
+// The tile nodes reached by the stencils of particles in block `blk` whose base nodes lie in [lo, hi] per
+// axis (lo > hi on an axis: none).
+template <int D>
+TileBox<D> tile_box_of_bases(const int* blk, const int* lo, const int* hi) {
+  TileBox<D> box;
+  bool empty = false;
+  for (int d = 0; d < D; ++d) empty |= lo[d] > hi[d];
+  for (int d = 0; d < D; ++d) {
+    const int origin = blk[d] * kBlock - 1;
+    const int first = empty ? kTile : lo[d] - origin, last = empty ? 0 : hi[d] - origin + 3;
+    box.lo[d] = std::max(0, first);
+    box.hi[d] = std::min(kTile, std::max(last, box.lo[d]));
+  }
+  return box;
+}
+
 // The tile nodes that the particles [begin, end) of block `blk` reach: the union of their 3^D stencils, [lo,
 // hi) per axis in tile coordinates. P2G zeroes and fills only these, the grid gather adds only these (the
 // rest of the tile would add exact zeros) and G2P fetches only these from the grid: a block of a thin sheet
@@ -77,16 +93,9 @@ void stencil_base_range(const T* const* x, uint32_t begin, uint32_t end, const T
 template <int D, typename T>
 TileBox<D> tile_box(const int* blk, const T* const* x, uint32_t begin, uint32_t end, const T* lo_grid,
                     T inv_dx) {
-  TileBox<D> box;
   int lo[D], hi[D];
   stencil_base_range<D>(x, begin, end, lo_grid, inv_dx, lo, hi);
-  for (int d = 0; d < D; ++d) {
-    const int origin = blk[d] * kBlock - 1;
-    const int first = begin < end ? lo[d] - origin : kTile, last = begin < end ? hi[d] - origin + 3 : 0;
-    box.lo[d] = std::max(0, first);
-    box.hi[d] = std::min(kTile, std::max(last, box.lo[d]));
-  }
-  return box;
+  return tile_box_of_bases<D>(blk, lo, hi);
 }
 
 // Calls row(a, len) for each row of the box along the last axis: its first tile node and its length.

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <string>
 
+#include "solver/mpm/thread_shares.h"
 #include "solver/scene.h"
 #include "solver/simulation.h"
 #include "test_util.h"
@@ -123,6 +124,38 @@ TEST(Threads, DamBreak3DFloat) {
                     "loads": [{"name": "column", "boundary": "column"}]}
   })";
   compare(parse_scene_text(text, "dam3d.json"));
+}
+
+// The shares every stage hands the threads: contiguous, each block in exactly one, balanced by particles to
+// within one block, and each share's grid blocks the keys from its first particle block's on.
+TEST(ThreadShares, SplitCoversEveryBlockOnceBalancedByParticleCount) {
+  // Particle blocks (keys 10, 20, ...) of 1 to 64 particles; grid blocks at every key from 5 to 205.
+  std::vector<uint64_t> pkeys, gkeys;
+  std::vector<uint32_t> pstart = {0};
+  for (int b = 0; b < 19; ++b) {
+    pkeys.push_back(10 * (b + 1));
+    pstart.push_back(pstart.back() + 1 + (b * 37) % 64);
+  }
+  for (uint64_t k = 5; k <= 205; ++k) gkeys.push_back(k);
+  const double particles = pstart.back();
+  for (int shares : {1, 2, 3, 7, 19, 25}) {
+    SCOPED_TRACE(std::to_string(shares) + " shares");
+    mpm::ThreadShares t;
+    t.split(pstart, pkeys, gkeys, shares);
+    ASSERT_EQ(t.count(), shares);
+    EXPECT_EQ(t.pfirst.front(), 0);
+    EXPECT_EQ(t.pfirst.back(), static_cast<long>(pkeys.size()));
+    EXPECT_EQ(t.gfirst.front(), 0);
+    EXPECT_EQ(t.gfirst.back(), static_cast<long>(gkeys.size()));
+    for (int s = 0; s < shares; ++s) {
+      EXPECT_LE(t.pfirst[s], t.pfirst[s + 1]);
+      EXPECT_LE(t.gfirst[s], t.gfirst[s + 1]);
+      const double count = pstart[t.pfirst[s + 1]] - pstart[t.pfirst[s]];
+      EXPECT_LE(std::fabs(count - particles / shares), 64.0) << "share " << s;
+      if (s > 0 && t.pfirst[s] < static_cast<long>(pkeys.size()))  // its grid blocks start at its first key
+        EXPECT_EQ(gkeys[t.gfirst[s]], pkeys[t.pfirst[s]]) << "share " << s;
+    }
+  }
 }
 
 }  // namespace
