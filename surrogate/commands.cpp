@@ -348,6 +348,12 @@ int posterior(Args a) {
               "leave-one-out %.4f), noise %.4g m over %.0f residuals, %zu MCMC samples (acceptance %.2f)\n",
               a.calibration.c_str(), post.evaluations, post.local, post.q2, a.posterior.noise_m, data.n_residuals,
               a.posterior.samples, post.acceptance);
+  // Below 0.5 the misfit surrogate misses more than half the misfit's variation among the very evaluations it
+  // was fitted to: the curvature that sets the intervals is not the misfit's (docs/surrogates.md, the twins).
+  if (!(post.q2 >= 0.5))
+    std::printf("# warning: the misfit surrogate predicts the evaluations it leaves out poorly (Q2 %.3g): the "
+                "posterior rests on a fit that does not describe the misfit; evaluate more points near the optimum "
+                "(a longer profile) before trusting these intervals\n", post.q2);
   if (post.best_rms > 2 * a.posterior.noise_m)
     std::printf("# warning: the best misfit, RMS %.4g m, is %.1f times the noise: the residual is not the noise "
                 "alone (model error, or the optimizer stopped short), so these intervals are too narrow\n",
