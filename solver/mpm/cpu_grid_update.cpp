@@ -60,8 +60,9 @@ template <int D, typename T>
 void MpmSolver<D, T>::grid_update(T dt) {
   const T inv_cell_volume = T(1) / T(std::pow(dx_, D));
   const int nthreads = omp_get_max_threads();
-  // Each thread's load sums on cache lines of their own (shared lines cost a transfer per wall node).
-  const size_t stride = (walls_.size() * D + 7) / 8 * 8;
+  // A cache line (8 doubles) between one thread's load sums and the next's, wherever the buffer starts: a
+  // shared line costs a transfer per wall node.
+  const size_t stride = walls_.size() * D + 8;
   std::vector<double> impulse(static_cast<size_t>(nthreads) * stride, 0.0);
   if (debris_) debris_->begin_grid(nthreads);
   ghosts_.begin(nthreads);
