@@ -9,11 +9,24 @@
 namespace flume::sph {
 
 namespace {
+// Beyond a symmetry plane: where the modelled flow's mirror image lies. No wall is seeded there; the solver
+// takes the images of the walls on the water's side instead (sph/mirror.h).
+bool beyond_symmetry(const Scene& s, const Vec3d& p, double tol) {
+  for (const auto& b : s.boundaries)
+    if (b.condition == BoundaryCondition::kSymmetry) {
+      double side = 0;
+      for (int d = 0; d < s.dimension; ++d) side += (p[d] - b.shape.point[d]) * b.shape.normal[d];
+      if (side < -tol) return true;
+    }
+  return false;
+}
+
 // Solid at p: outside the domain box, or in (or on the face of) a boundary's solid. The owner is the first
-// boundary holding p, -1 for the domain's walls.
+// boundary holding p, -1 for the domain's walls. A symmetry plane is not a solid.
 bool solid_at(const Scene& s, const Vec3d& p, double tol, int& owner) {
   for (std::size_t b = 0; b < s.boundaries.size(); ++b)
-    if (shape_distance(s.boundaries[b].shape, p, s.dimension) <= tol) {
+    if (s.boundaries[b].condition != BoundaryCondition::kSymmetry &&
+        shape_distance(s.boundaries[b].shape, p, s.dimension) <= tol) {
       owner = static_cast<int>(b);
       return true;
     }
@@ -59,7 +72,7 @@ WallParticles make_wall_particles(const Scene& scene, double spacing, int layers
     const Vec3d p = point(i, k);
     int o;
     const bool solid = solid_at(scene, p, tol, o);
-    near[i] = solid ? 0 : 1;
+    near[i] = solid || beyond_symmetry(scene, p, tol) ? 0 : 1;
   }
   long stride = 1;
   std::vector<uint8_t> tmp(count);
@@ -81,7 +94,7 @@ WallParticles make_wall_particles(const Scene& scene, double spacing, int layers
     long k[3];
     const Vec3d p = point(i, k);
     int o;
-    if (!solid_at(scene, p, tol, o)) continue;
+    if (!solid_at(scene, p, tol, o) || beyond_symmetry(scene, p, tol)) continue;
     for (int d = 0; d < 3; ++d) w.x[d].push_back(p[d]);
     w.wall.push_back(o);
     for (int d = 0; d < 3; ++d) w.velocity.push_back(o >= 0 ? scene.boundaries[o].velocity[d] : 0.0);

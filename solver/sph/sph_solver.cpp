@@ -22,6 +22,7 @@
 #include "solver/simulation.h"
 #include "solver/sph/boundary_particles.h"
 #include "solver/sph/cell_list.h"
+#include "solver/sph/mirror.h"
 #include "solver/sph/sph_kernels.h"
 #include "solver/sph/sph_launch.h"
 
@@ -101,6 +102,7 @@ class SphSolver final : public Simulation {
       rho_[i] = sph::correct_density(rho_[i], rhoh_[i], drho_[i], T(dt));
     });
     if (shifting_) shift(T(dt));
+    if (mirror_.active()) reflect_crossings();
     sph::parallel_for(nw_, [&](size_t k) {
       rhow_[k] = std::max(T(P_.rho0), sph::correct_density(rhow_[k], rhowh_[k], drhow_[k], T(dt)));
     });
@@ -265,10 +267,6 @@ class SphSolver final : public Simulation {
       throw InputError(scene_.file, "debris", "SPH does not couple debris yet" + why);
     if (scene_.inflow.present)
       throw InputError(scene_.file, "inflow", "SPH has no inflow boundary yet" + why);
-    for (const auto& b : scene_.boundaries)
-      if (b.condition == BoundaryCondition::kSymmetry)
-        throw InputError(scene_.file, "boundaries." + b.name + ".condition",
-                         "SPH has no symmetry plane yet: model the full span" + why);
   }
 
   void setup_params() {
@@ -324,6 +322,16 @@ class SphSolver final : public Simulation {
     g_norm_ = 0;
     for (int d = 0; d < D; ++d) g_norm_ += scene_.solver.gravity[d] * scene_.solver.gravity[d];
     g_norm_ = std::sqrt(g_norm_);
+    for (const auto& b : scene_.boundaries)
+      if (b.condition == BoundaryCondition::kSymmetry)
+        for (int d = 0; d < D; ++d)
+          if (std::fabs(b.shape.normal[d]) > 0.5) {
+            mirror_.axis = d;
+            mirror_.sign = b.shape.normal[d] > 0 ? 1 : -1;  // the normal points into the modelled water
+            mirror_.at = b.shape.point[d];
+          }
+    Pm_ = P_;
+    if (mirror_.active()) Pm_.g[mirror_.axis] = -P_.g[mirror_.axis];
   }
 
   void seed_fluid() {
@@ -492,19 +500,31 @@ class SphSolver final : public Simulation {
       const T rho_a = R[a], ira = irf_[a], p_a = pf_[a], k_a = sph::hydrostatic_density_slope(rho_a, p_a, P);
       T tau_a[kS];
       for (int k = 0; k < kS; ++k) tau_a[k] = tau_[k][a];
+      // The sums over the fluid and the walls around the point x moving at v, for a particle of stress tau.
+      auto gather = [&](const sph::Params<T>& Q, const T* x, const T* v, const T* tau, Accum<D, T>& A) {
+        for_pairs(fluid_list_, X, V, x, v, [&](uint32_t b, const T* rab, T r2, const T* vab, T F) {
+          sph::pair_common<D, T>(Q, rab, r2, F, vab, rho_a, ira, p_a, R[b], irf_[b], pf_[b], mass_[b], A);
+          T tau_b[kS];
+          for (int k = 0; k < kS; ++k) tau_b[k] = tau_[k][b];
+          sph::pair_fluid_extras<D, T>(Q, rab, r2, F, vab, rho_a, k_a, R[b], irf_[b], mass_[b], tau, tau_b, A);
+          if (shift_sums) sph::pair_shift<D, T>(rab, r2, F, mass_[b] * irf_[b], A);
+        });
+        for_pairs(wall_list_, xw_, vw_, x, v, [&](uint32_t b, const T* rab, T r2, const T* vab, T F) {
+          sph::pair_common<D, T>(Q, rab, r2, F, vab, rho_a, ira, p_a, RW[b], irw_[b], pw_[b], mw_, A);
+          if (shift_sums) sph::pair_shift<D, T>(rab, r2, F, mw_ * irw_[b], A);
+        });
+      };
       Accum<D, T> A;
-      for_pairs(fluid_list_, X, V, xa, va, [&](uint32_t b, const T* rab, T r2, const T* vab, T F) {
-        sph::pair_common<D, T>(P, rab, r2, F, vab, rho_a, ira, p_a, R[b], irf_[b], pf_[b], mass_[b], A);
-        T tau_b[kS];
-        for (int k = 0; k < kS; ++k) tau_b[k] = tau_[k][b];
-        sph::pair_fluid_extras<D, T>(P, rab, r2, F, vab, rho_a, k_a, R[b], irf_[b], mass_[b], tau_a, tau_b,
-                                     A);
-        if (shift_sums) sph::pair_shift<D, T>(rab, r2, F, mass_[b] * irf_[b], A);
-      });
-      for_pairs(wall_list_, xw_, vw_, xa, va, [&](uint32_t b, const T* rab, T r2, const T* vab, T F) {
-        sph::pair_common<D, T>(P, rab, r2, F, vab, rho_a, ira, p_a, RW[b], irw_[b], pw_[b], mw_, A);
-        if (shift_sums) sph::pair_shift<D, T>(rab, r2, F, mw_ * irw_[b], A);
-      });
+      gather(P, xa, va, tau_a, A);
+      if (near_mirror(xa)) {  // the images across the symmetry plane, gathered at this particle's own image
+        T xm[D], vm[D], tau_m[kS];
+        sph::reflect_point<D>(mirror_.axis, T(mirror_.at), xa, xm);
+        sph::reflect_vector<D>(mirror_.axis, va, vm);
+        sph::reflect_sym<D>(mirror_.axis, tau_a, tau_m);
+        Accum<D, T> M;
+        gather(Pm_, xm, vm, tau_m, M);
+        sph::add_reflected(mirror_.axis, M, A);
+      }
       if (shift_sums) {
         for (int d = 0; d < D; ++d) gradc_[d][a] = A.gradc[d];
         divr_[a] = A.divr;
@@ -531,10 +551,21 @@ class SphSolver final : public Simulation {
         vk[d] = vw_[d][k];
       }
       const T rho_k = RW[k], p_k = pw_[k];
+      auto gather = [&](const T* x, const T* v, Accum<D, T>& A) {
+        for_pairs(fluid_list_, X, V, x, v, [&](uint32_t b, const T* rab, T r2, const T* vab, T F) {
+          sph::pair_common<D, T>(P, rab, r2, F, vab, rho_k, irw_[k], p_k, R[b], irf_[b], pf_[b], mass_[b], A);
+        });
+      };
       Accum<D, T> A;
-      for_pairs(fluid_list_, X, V, xk, vk, [&](uint32_t b, const T* rab, T r2, const T* vab, T F) {
-        sph::pair_common<D, T>(P, rab, r2, F, vab, rho_k, irw_[k], p_k, R[b], irf_[b], pf_[b], mass_[b], A);
-      });
+      gather(xk, vk, A);
+      if (near_mirror(xk)) {
+        T xm[D], vm[D];
+        sph::reflect_point<D>(mirror_.axis, T(mirror_.at), xk, xm);
+        sph::reflect_vector<D>(mirror_.axis, vk, vm);
+        Accum<D, T> M;
+        gather(xm, vm, M);
+        sph::add_reflected(mirror_.axis, M, A);
+      }
       drhow_[k] = A.drho;
       for (int d = 0; d < D; ++d) fw_[d][k] = mw_ * A.acc[d];
     });
@@ -556,6 +587,23 @@ class SphSolver final : public Simulation {
       }
       sph::shift_displacement<D, T>(P, gc, divr_[i], std::sqrt(s2), dt, dr);
       for (int d = 0; d < D; ++d) x_[d][i] += dr[d];
+    });
+  }
+
+  // Whether the kernel's support (with the drift margin) around x reaches across the symmetry plane.
+  bool near_mirror(const T* x) const { return mirror_.active() && mirror_.side(x) < search_; }
+
+  // A particle that crossed the symmetry plane is its image that crossed the other way: it takes the image's
+  // place (position and velocity reflected), as the whole flow would have it.
+  void reflect_crossings() {
+    const int ax = mirror_.axis;
+    const T at = T(mirror_.at);
+    sph::parallel_for(n_, [&](size_t i) {
+      T x[D];
+      for (int d = 0; d < D; ++d) x[d] = x_[d][i];
+      if (mirror_.side(x) >= 0) return;
+      x_[ax][i] = T(2) * at - x_[ax][i];
+      v_[ax][i] = -v_[ax][i];
     });
   }
 
@@ -650,6 +698,8 @@ class SphSolver final : public Simulation {
   InstrumentSet<SphSolver> instruments_;
   sph::Params<T> P_;
   sph::Params<double> Pd_;
+  sph::Mirror mirror_;  // the symmetry plane, if the scene has one
+  sph::Params<T> Pm_;   // P_ in the reflected frame (gravity reflected)
   bool artificial_ = false;
   bool shifting_ = false;
   double spacing_ = 0, h_ = 0, search_ = 0, g_norm_ = 0;
