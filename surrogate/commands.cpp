@@ -70,6 +70,7 @@ struct Args {
   surrogate::PosteriorSettings posterior;
   bool has_noise = false;
   std::string posterior_surrogate = "series";
+  bool has_neighbourhood = false;
   std::string draws_out;
   double end_time = 0;
 };
@@ -168,6 +169,7 @@ Args parse_args(int argc, char** argv) {
                          "must be series or misfit (got '" + a.posterior_surrogate + "')");
     } else if (s == "--neighbourhood") {
       a.posterior.neighbourhood = parse_number(s, value(), 0, 1e6);
+      a.has_neighbourhood = true;
     } else if (s == "--draws") {
       a.posterior.draws = parse_count(s, value(), 2, 10000);
     } else if (s == "--draws-out") {
@@ -350,6 +352,8 @@ int posterior(Args a) {
     throw InputError("command line", "--draws",
                      "is required with --draws-out (how many posterior draws, 2 to 10000)");
   const bool series = a.posterior_surrogate == "series";
+  if (!series && a.has_neighbourhood)
+    throw InputError("command line", "--neighbourhood", "goes with the series emulator, not --surrogate misfit");
   surrogate::SeriesData series_data;
   surrogate::MisfitData misfit_data;
   if (series)

@@ -39,8 +39,8 @@ SeriesData load_calibration_series(const std::string& db_file, const std::string
     d.lower.push_back(p.lower);
     d.upper.push_back(p.upper);
   }
-  std::map<std::vector<double>, std::vector<double>>
-      unique;  // a point evaluated twice (replayed) counts once
+  // A point evaluated twice (replayed) counts once.
+  std::map<std::vector<double>, std::vector<double>> unique;
   for (const auto& e : db.evaluations(c->id)) {
     const json params = json::parse(e.params_json), terms = json::parse(e.terms_json);
     if (terms.contains("failed") || !terms.contains("rms_m") || !terms["rms_m"].is_number()) continue;
