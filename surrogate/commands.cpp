@@ -17,6 +17,7 @@
 #include "surrogate/multilevel_command.h"
 #include "surrogate/ot_models.h"
 #include "surrogate/posterior.h"
+#include "surrogate/series_posterior.h"
 #include "surrogate/stored.h"
 
 namespace flume {
@@ -44,10 +45,13 @@ const char* kUsage =
     "        run, default the mean wall times): multi-fidelity Monte Carlo (Peherstorfer et al. 2016) with the\n"
     "        optimal weights and with unit weights, two levels also by Giles' two-level Monte Carlo; each against\n"
     "        high runs alone for the same variance, and the optimal allocation\n"
-    "  flume surrogate posterior --db FILE --calibration NAME --noise-m SIGMA [--samples N] [--seed S]\n"
-    "        [--draws K --draws-out SPEC.json [--end-time S]]\n"
-    "        posterior of a calibration's parameters by MCMC on a kriging surrogate of its misfit; with --draws,\n"
-    "        a campaign spec of K posterior draws whose runs give the predictive band (flume gauges --band)\n";
+    "  flume surrogate posterior --db FILE --calibration NAME --noise-m SIGMA [--surrogate series|misfit]\n"
+    "        [--neighbourhood D] [--samples N] [--seed S] [--draws K --draws-out SPEC.json [--end-time S]]\n"
+    "        posterior of a calibration's parameters by MCMC on an emulator of its gauge series (default: the\n"
+    "        records of the runs within D noises, default 1, of the best's, by principal components and kriging,\n"
+    "        its leave-one-out error added to the noise) or on a kriging of its misfit (--surrogate misfit);\n"
+    "        with --draws, a campaign spec of K posterior draws whose runs give the predictive band (flume\n"
+    "        gauges --band)\n";
 
 struct Args {
   std::string verb, db, campaign;
@@ -65,6 +69,8 @@ struct Args {
   std::string calibration;
   surrogate::PosteriorSettings posterior;
   bool has_noise = false;
+  std::string posterior_surrogate = "series";
+  bool has_neighbourhood = false;
   std::string draws_out;
   double end_time = 0;
 };
@@ -156,6 +162,14 @@ Args parse_args(int argc, char** argv) {
     } else if (s == "--noise-m") {
       a.posterior.noise_m = parse_number(s, value(), 1e-9, 10);
       a.has_noise = true;
+    } else if (s == "--surrogate") {
+      a.posterior_surrogate = value();
+      if (a.posterior_surrogate != "series" && a.posterior_surrogate != "misfit")
+        throw InputError("command line", "--surrogate",
+                         "must be series or misfit (got '" + a.posterior_surrogate + "')");
+    } else if (s == "--neighbourhood") {
+      a.posterior.neighbourhood = parse_number(s, value(), 0, 1e6);
+      a.has_neighbourhood = true;
     } else if (s == "--draws") {
       a.posterior.draws = parse_count(s, value(), 2, 10000);
     } else if (s == "--draws-out") {
@@ -335,25 +349,50 @@ int posterior(Args a) {
   if (a.posterior.draws > 0 && a.draws_out.empty())
     throw InputError("command line", "--draws-out", "is required with --draws (the campaign spec to write)");
   if (a.posterior.draws == 0 && !a.draws_out.empty())
-    throw InputError("command line", "--draws", "is required with --draws-out (how many posterior draws, 2 to 10000)");
-  const auto data = surrogate::load_calibration_misfit(a.db, a.calibration);
+    throw InputError("command line", "--draws",
+                     "is required with --draws-out (how many posterior draws, 2 to 10000)");
+  const bool series = a.posterior_surrogate == "series";
+  if (!series && a.has_neighbourhood)
+    throw InputError("command line", "--neighbourhood", "goes with the series emulator, not --surrogate misfit");
+  surrogate::SeriesData series_data;
+  surrogate::MisfitData misfit_data;
+  if (series)
+    series_data = surrogate::load_calibration_series(a.db, a.calibration);
+  else
+    misfit_data = surrogate::load_calibration_misfit(a.db, a.calibration);
+  const surrogate::CalibrationBox& box =
+      series ? static_cast<const surrogate::CalibrationBox&>(series_data) : misfit_data;
   double end_time = a.end_time;
   if (a.posterior.draws > 0 && end_time <= 0) {
-    const json spec = json::parse(data.spec_json);
+    const json spec = json::parse(box.spec_json);
     end_time = spec.value("overrides", json::object()).value("solver.end_time", 0.0);
     if (end_time <= 0) throw InputError("command line", "--end-time", "is required: the calibration sets no solver.end_time");
   }
-  const auto post = surrogate::misfit_posterior(data, a.posterior);
-  std::printf("# posterior of '%s': %zu evaluations, %zu near the best fitted by the misfit surrogate (Q2 "
-              "leave-one-out %.4f), noise %.4g m over %.0f residuals, %zu MCMC samples (acceptance %.2f)\n",
-              a.calibration.c_str(), post.evaluations, post.local, post.q2, a.posterior.noise_m, data.n_residuals,
-              a.posterior.samples, post.acceptance);
-  // Below 0.5 the misfit surrogate misses more than half the misfit's variation among the very evaluations it
-  // was fitted to: the curvature that sets the intervals is not the misfit's (docs/surrogates.md, the twins).
+  const auto post = series ? surrogate::series_posterior(series_data, a.posterior)
+                           : surrogate::misfit_posterior(misfit_data, a.posterior);
+  const double residuals = series ? series_data.n_residuals : misfit_data.n_residuals;
+  if (series)
+    std::printf(
+        "# posterior of '%s': %zu evaluations, %zu near the best fitted by the series emulator (%zu "
+        "components, Q2 leave-one-out %.4f, error RMS %.4g m added to the noise), noise %.4g m over %.0f "
+        "residuals, %zu MCMC samples (acceptance %.2f)\n",
+        a.calibration.c_str(), post.evaluations, post.local, post.components, post.q2, post.emulator_rms,
+        a.posterior.noise_m, residuals, a.posterior.samples, post.acceptance);
+  else
+    std::printf(
+        "# posterior of '%s': %zu evaluations, %zu near the best fitted by the misfit surrogate (Q2 "
+        "leave-one-out %.4f), noise %.4g m over %.0f residuals, %zu MCMC samples (acceptance %.2f)\n",
+        a.calibration.c_str(), post.evaluations, post.local, post.q2, a.posterior.noise_m, residuals,
+        a.posterior.samples, post.acceptance);
+  // Below 0.5 the surrogate misses more than half the variation among the very evaluations it was fitted
+  // to: for the misfit, the curvature that sets the intervals is not the misfit's (docs/surrogates.md, the
+  // twins); for the series, its error variance then rivals the series' own and the intervals are mostly it.
   if (!(post.q2 >= 0.5))
-    std::printf("# warning: the misfit surrogate predicts the evaluations it leaves out poorly (Q2 %.3g): the "
-                "posterior rests on a fit that does not describe the misfit; evaluate more points near the optimum "
-                "(a longer profile) before trusting these intervals\n", post.q2);
+    std::printf(
+        "# warning: the %s predicts the evaluations it leaves out poorly (Q2 %.3g): the "
+        "posterior rests on a fit that does not describe them; evaluate more points near the optimum "
+        "(a longer profile) before trusting these intervals\n",
+        series ? "series emulator" : "misfit surrogate", post.q2);
   if (post.best_rms > 2 * a.posterior.noise_m)
     std::printf("# warning: the best misfit, RMS %.4g m, is %.1f times the noise: the residual is not the noise "
                 "alone (model error, or the optimizer stopped short), so these intervals are too narrow\n",
@@ -366,7 +405,7 @@ int posterior(Args a) {
       std::printf("# warning: the interval of %s reaches the edge of the evaluated neighbourhood, which cuts it: "
                   "evaluate around the optimum more widely (the calibration's profile span)\n", p.name.c_str());
   if (a.posterior.draws > 0) {
-    const std::string text = surrogate::predictive_spec(data, post, a.calibration, end_time);
+    const std::string text = surrogate::predictive_spec(box, post, a.calibration, end_time);
     std::ofstream f(a.draws_out);
     if (!(f << text << "\n")) throw InputError(a.draws_out, "--draws-out", "cannot write the file");
     std::printf("wrote %s: %zu posterior draws (run them with flume campaign run)\n", a.draws_out.c_str(),

@@ -131,6 +131,10 @@ OT::KrigingResult fit_kriging_quadratic_trend(const OT::Sample& x, const OT::Sam
   return fit_kriging_with(x, y, OT::QuadraticBasisFactory(x.getDimension()).build());
 }
 
+OT::KrigingResult fit_kriging_linear_trend(const OT::Sample& x, const OT::Sample& y) {
+  return fit_kriging_with(x, y, OT::LinearBasisFactory(x.getDimension()).build());
+}
+
 OT::KrigingResult refit_kriging(const OT::KrigingResult& fitted, const OT::Sample& x, const OT::Sample& y) {
   OT::KrigingAlgorithm algo(x, y, fitted.getCovarianceModel(), fitted.getBasisCollection()[0]);
   algo.setOptimizeParameters(false);

@@ -34,6 +34,8 @@ OT::KrigingResult fit_kriging(const OT::Sample& x, const OT::Sample& y);
 // The same with a quadratic trend (universal kriging): for a function known to be near a quadratic, such as
 // a misfit near its minimum, whose extrapolation should follow the quadratic rather than fall to the mean.
 OT::KrigingResult fit_kriging_quadratic_trend(const OT::Sample& x, const OT::Sample& y);
+// The same with a linear trend: for a function near a linear one, such as a gauge series near an optimum.
+OT::KrigingResult fit_kriging_linear_trend(const OT::Sample& x, const OT::Sample& y);
 // The same covariance (scales, amplitude) and trend basis on other runs: cross-validation folds and adaptive
 // batches.
 OT::KrigingResult refit_kriging(const OT::KrigingResult& fitted, const OT::Sample& x, const OT::Sample& y);

@@ -1,6 +1,6 @@
 // Calibration with uncertainty: the posterior of a calibration's free parameters given the gauge records
-// under a noise model, sampled by OpenTURNS' RandomWalkMetropolisHastings on a kriging surrogate of the
-// misfit rather than on solver runs.
+// under a noise model, sampled by OpenTURNS' RandomWalkMetropolisHastings on a surrogate rather than on
+// solver runs: of the gauge series (series_posterior.h, the default) or, here, of the misfit.
 //   likelihood  independent Gaussian residuals of standard deviation sigma (the noise model):
 //               log L(theta) = -SSR(theta) / (2 sigma^2) + const,  SSR = sum of squared residuals over the
 //               n samples of every target record (n RMS^2, RMS the calibration's stored term)
@@ -20,13 +20,17 @@
 
 namespace flume::surrogate {
 
-struct MisfitData {
+// A calibration's free parameters (a time shift last) and its stored spec.
+struct CalibrationBox {
   std::vector<std::string> names;
   std::vector<double> lower, upper;
+  std::string spec_json;  // the calibration's stored spec (its scene or model and overrides)
+};
+
+struct MisfitData : CalibrationBox {
   std::vector<std::vector<double>> points;  // parameter values of each evaluation
   std::vector<double> ssr;                  // its sum of squared residuals, m^2
   double n_residuals = 0;
-  std::string spec_json;  // the calibration's stored spec (its scene or model and overrides)
 };
 
 struct PosteriorSettings {
@@ -35,6 +39,11 @@ struct PosteriorSettings {
   double confidence = 0.95;
   std::uint64_t seed = 1;
   std::size_t draws = 0;  // posterior points kept for the predictive runs, evenly spaced along the chain
+  // The series emulator's own error variance in the likelihood (series_posterior.h). Off only to show, in
+  // the tests, what leaving it out does.
+  bool emulator_error = true;
+  // The series emulator's neighbourhood: the evaluations whose records lie within this many noises of the best's.
+  double neighbourhood = 1.0;
 };
 
 struct PosteriorParameter {
@@ -48,9 +57,11 @@ struct Posterior {
   std::vector<PosteriorParameter> parameters;
   std::size_t evaluations = 0;
   double acceptance = 0;
-  double q2 = 0;  // leave-one-out Q2 of the misfit surrogate over its (local) evaluations
-  std::size_t local = 0;  // evaluations the surrogate is fitted to
-  double best_rms = 0;    // the least misfit's RMS, m: well above the noise means model error or no optimum
+  double q2 = 0;  // leave-one-out Q2 of the surrogate (misfit, or the series) over its (local) evaluations
+  std::size_t local = 0;       // evaluations the surrogate is fitted to
+  std::size_t components = 0;  // series emulator: principal components kept
+  double emulator_rms = 0;     // series emulator: RMS of its leave-one-out error over the series, m
+  double best_rms = 0;  // the least misfit's RMS, m: well above the noise means model error or no optimum
   std::vector<std::vector<double>> draws;  // in the parameters' units, `names` order
 };
 
@@ -70,7 +81,7 @@ MisfitData load_calibration_misfit(const std::string& db_file, const std::string
 // run` gives the records whose spread is the predictive band (`flume gauges --band`). A time shift of the
 // comparison is not a scene value and is left out. Throws flume::InputError for a calibration of a stand-in
 // model or a scene file no longer there.
-std::string predictive_spec(const MisfitData& data, const Posterior& posterior, const std::string& calibration,
-                            double end_time_s);
+std::string predictive_spec(const CalibrationBox& data, const Posterior& posterior,
+                            const std::string& calibration, double end_time_s);
 
 }  // namespace flume::surrogate

@@ -145,6 +145,20 @@ std::string two_parameter_spec(const std::string& name, const std::string& algor
          algorithm + extra + "}";
 }
 
+// The 95 % interval of a parameter in `flume surrogate posterior`'s table (parameter,best,mean,median,lo,hi).
+std::pair<double, double> posterior_interval(const std::string& out, const std::string& path) {
+  const auto at = out.find("\n" + path + ",");
+  if (at == std::string::npos) {
+    ADD_FAILURE() << "no row for " << path << " in\n" << out;
+    return {NAN, NAN};
+  }
+  std::istringstream row(out.substr(at + path.size() + 2));
+  double best, mean, median, lo, hi;
+  char comma;
+  row >> best >> comma >> mean >> comma >> median >> comma >> lo >> comma >> hi;
+  return {lo, hi};
+}
+
 }  // namespace
 
 // Issue 6 point 1 on the stand-in: BOBYQA from t99 = 0.2 s, gate 0.12 m recovers t99 = 0.8 s and gate
@@ -203,6 +217,20 @@ TEST(CalibrateTwin, BobyqaRecoversTwoParametersFromADistantStart) {
   const Result h = run(flume_cmd({"calibrate", "history", "--db", db.string(), "--name", "twin"}), dir);
   ASSERT_EQ(h.rc, 0) << h.err;
   EXPECT_NE(h.out.find("twin,optimize,0,0,"), std::string::npos);
+
+  // Issue 27 item 4 on the stand-in: the posterior on the series emulator (the runs' records read back, their
+  // residuals the calibration's: the command checks each run's RMS against the stored one) holds the truth.
+  const Result p = run(flume_cmd({"surrogate", "posterior", "--db", db.string(), "--calibration", "twin",
+                                  "--noise-m", std::to_string(kNoise_m)}),
+                       dir);
+  ASSERT_EQ(p.rc, 0) << p.err;
+  std::printf("%s", p.out.c_str());
+  EXPECT_NE(p.out.find("series emulator"), std::string::npos) << p.out;
+  for (const auto& [path, truth] : {std::pair{kT99Path, kT99}, std::pair{kGatePath, kGate}}) {
+    const auto [lo, hi] = posterior_interval(p.out, path);
+    EXPECT_LE(lo, truth) << path;
+    EXPECT_GE(hi, truth) << path;
+  }
 }
 
 // Issue 6 point 1: the global algorithm (CRS2_LM, polished by BOBYQA) from three starts finds the same
@@ -356,6 +384,20 @@ TEST(CalibrateTwin, TimeShiftIsFittedWithoutRerunning) {
   EXPECT_NEAR(best(j, kT99Path), kT99, 0.1 * kT99);
   EXPECT_NEAR(best(j, kGatePath), kGate, 0.1 * kGate);
   EXPECT_LT(j["evaluations"]["runs_in_store"].get<int>(), j["evaluations"]["optimizer"].get<int>());
+
+  // The series posterior compares each run's record shifted as its evaluation was: the shift's interval too.
+  const Result p = run(flume_cmd({"surrogate", "posterior", "--db", (dir / "s.db").string(), "--calibration",
+                                  "shift", "--noise-m", std::to_string(kNoise_m)}),
+                       dir);
+  ASSERT_EQ(p.rc, 0) << p.err;
+  std::printf("%s", p.out.c_str());
+  for (const auto& [path, truth] :
+       {std::pair{std::string(kT99Path), kT99}, std::pair{std::string(kGatePath), kGate},
+        std::pair{std::string("objective.time_shift_s"), 0.15}}) {
+    const auto [lo, hi] = posterior_interval(p.out, path);
+    EXPECT_LE(lo, truth) << path;
+    EXPECT_GE(hi, truth) << path;
+  }
 }
 
 // Malformed specs and target records: exit 2 with the file and field (or line and column), before any run.

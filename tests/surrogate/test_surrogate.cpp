@@ -292,6 +292,21 @@ TEST(Cli, FitSobolPredictAndBadInput) {
   r = flume_cmd({"surrogate", "posterior", "--db", db, "--calibration", "ishigami", "--noise-m", "0.002"}, dir);
   EXPECT_EQ(r.rc, 2);
   EXPECT_EQ(r.err.rfind(db + ": --calibration: 'ishigami' is a campaign, not a calibration", 0), 0u) << r.err;
+  r = flume_cmd({"surrogate", "posterior", "--db", db, "--calibration", "ishigami", "--noise-m", "0.002",
+                 "--surrogate", "misfit"},
+                dir);
+  EXPECT_EQ(r.rc, 2);
+  EXPECT_EQ(r.err.rfind(db + ": --calibration: 'ishigami' is a campaign, not a calibration", 0), 0u) << r.err;
+  r = flume_cmd({"surrogate", "posterior", "--db", db, "--calibration", "ishigami", "--noise-m", "0.002",
+                 "--surrogate", "chaos"},
+                dir);
+  EXPECT_EQ(r.rc, 2);
+  EXPECT_EQ(r.err.rfind("command line: --surrogate: must be series or misfit (got 'chaos')", 0), 0u) << r.err;
+  r = flume_cmd({"surrogate", "posterior", "--db", db, "--calibration", "ishigami", "--noise-m", "0.002",
+                 "--surrogate", "misfit", "--neighbourhood", "2"},
+                dir);
+  EXPECT_EQ(r.rc, 2);
+  EXPECT_EQ(r.err.rfind("command line: --neighbourhood: goes with the series emulator", 0), 0u) << r.err;
   r = flume_cmd({"surrogate", "multilevel", "--db", db, "--low", "ishigami", "--metric", "y"}, dir);
   EXPECT_EQ(r.rc, 2);
   EXPECT_NE(r.err.find("--high"), std::string::npos) << r.err;
