@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <random>
 
+#include "linear_gaussian.h"
 #include "surrogate/series_posterior.h"
 
 namespace {
@@ -37,21 +38,13 @@ DrawStats draw_stats(const std::vector<std::vector<double>>& x) {
 // components, each linear in the parameters, which the quadratic trend holds), so its error variance is
 // nil and the chain must reproduce the analytic posterior within its Monte Carlo error.
 TEST(SeriesPosterior, LinearSeriesHasTheAnalyticPosterior) {
-  const int n = 50;
-  const double sigma = 0.1;
-  std::vector<double> t(n), y(n);
-  std::mt19937_64 rng(5);
-  std::normal_distribution<double> noise(0, sigma);
-  for (int i = 0; i < n; ++i) {
-    t[i] = i / (n - 1.0);
-    y[i] = 1.0 + 2.0 * t[i] + noise(rng);
-  }
-  double st = 0, stt = 0, sy = 0, sty = 0;
-  for (int i = 0; i < n; ++i) st += t[i], stt += t[i] * t[i], sy += y[i], sty += t[i] * y[i];
-  const double det = n * stt - st * st;
-  const double mean[2] = {(stt * sy - st * sty) / det, (n * sty - st * sy) / det};
-  const double sd[2] = {sigma * std::sqrt(stt / det), sigma * std::sqrt(n / det)};
-  const double corr = -st / std::sqrt(n * stt);
+  const flume::test::LinearGaussian g = flume::test::linear_gaussian(50, 0.1);
+  const int n = g.n;
+  const double sigma = g.sigma, corr = g.corr;
+  const std::vector<double>& t = g.t;
+  const std::vector<double>& y = g.y;
+  const double* mean = g.mean;
+  const double* sd = g.sd;
   SeriesData d;
   d.names = {"a", "b"};
   d.lower = {0, 1};

@@ -11,6 +11,7 @@
 #include <random>
 
 #include "common/errors.h"
+#include "linear_gaussian.h"
 #include "report/report.h"
 #include "surrogate/adaptive.h"
 #include "surrogate/multilevel.h"
@@ -289,20 +290,12 @@ TEST(Multilevel, PairsTwoCampaignsOfAStore) {
 // evaluations as an optimizer and its profile would leave them: a coarse grid over the bounds and a finer one
 // around the optimum.
 TEST(Posterior, LinearGaussianModelHasItsAnalyticPosterior) {
-  const int n = 50;
-  const double sigma = 0.1;
-  std::vector<double> t(n), y(n);
-  std::mt19937_64 rng(5);
-  std::normal_distribution<double> noise(0, sigma);
-  for (int i = 0; i < n; ++i) {
-    t[i] = i / (n - 1.0);
-    y[i] = 1.0 + 2.0 * t[i] + noise(rng);
-  }
-  double st = 0, stt = 0, sy = 0, sty = 0;
-  for (int i = 0; i < n; ++i) st += t[i], stt += t[i] * t[i], sy += y[i], sty += t[i] * y[i];
-  const double det = n * stt - st * st;
-  const double a_hat = (stt * sy - st * sty) / det, b_hat = (n * sty - st * sy) / det;
-  const double sd_a = sigma * std::sqrt(stt / det), sd_b = sigma * std::sqrt(n / det);
+  const flume::test::LinearGaussian g = flume::test::linear_gaussian(50, 0.1);
+  const int n = g.n;
+  const double sigma = g.sigma;
+  const std::vector<double>& t = g.t;
+  const std::vector<double>& y = g.y;
+  const double a_hat = g.mean[0], b_hat = g.mean[1], sd_a = g.sd[0], sd_b = g.sd[1];
   auto ssr = [&](double a, double b) {
     double s = 0;
     for (int i = 0; i < n; ++i) s += std::pow(y[i] - a - b * t[i], 2);
