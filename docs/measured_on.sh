@@ -1,0 +1,23 @@
+#!/usr/bin/env bash
+# Prints the line that heads every re-measured table in docs/: the commit the solver was built from (as the binary
+# reports it, `flume --version`), the date, the machine, the build and the threads. Sourced by the scripts beside the docs (docs/tradeoff/, docs/waseda/,
+# docs/debris/), or run on its own:  docs/measured_on.sh FLUME [THREADS]
+measured_on() {  # measured_on FLUME THREADS
+  local flume=$1 threads=$2 root build cache native="?" type="?"
+  root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+  build=$(cd "$(dirname "$(realpath "$flume")")/.." && pwd)
+  cache=$build/CMakeCache.txt
+  if [[ -f $cache ]]; then
+    native=$(sed -n 's/^FLUME_NATIVE:BOOL=//p' "$cache")
+    type=$(sed -n 's/^CMAKE_BUILD_TYPE:STRING=//p' "$cache")
+  fi
+  local version commit
+  version=$("$flume" --version 2>/dev/null | head -1)  # flume 0.1.0 (ab61e6f, portable build)
+  commit=$(sed -n 's/.*(\([^,]*\),.*/\1/p' <<<"$version")
+  [[ -n $commit ]] || commit="$(git -C "$root" rev-parse --short HEAD) (the working tree's; the binary does not say)"
+  printf 'Measured at commit %s, %s UTC; %s, %s cores (%s GiB), load average %s before the runs; build %s, %s; %s OpenMP thread(s) per run, one run at a time.\n' \
+    "$commit" "$(date -u '+%F %H:%M')" \
+    "$(sed -n 's/^model name[[:space:]]*: //p' /proc/cpuinfo | head -1)" "$(nproc --all)" "$(awk '/MemTotal/ {printf "%.0f", $2 / 1048576}' /proc/meminfo)" \
+    "$(cut -d' ' -f1-3 /proc/loadavg)" "$type" "$([[ $native == ON ]] && echo native || echo portable)" "$threads"
+}
+if [[ ${BASH_SOURCE[0]} == "$0" ]]; then measured_on "${1:-build/bin/flume}" "${2:-${OMP_NUM_THREADS:-?}}"; fi
