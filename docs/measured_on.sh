@@ -20,4 +20,20 @@ measured_on() {  # measured_on FLUME THREADS
     "$(sed -n 's/^model name[[:space:]]*: //p' /proc/cpuinfo | head -1)" "$(nproc --all)" "$(awk '/MemTotal/ {printf "%.0f", $2 / 1048576}' /proc/meminfo)" \
     "$(cut -d' ' -f1-3 /proc/loadavg)" "$type" "$([[ $native == ON ]] && echo native || echo portable)" "$threads"
 }
+
+# Runs SCENE into OUT unless OUT already holds a finished run (a killed script resumes where it stopped), then
+# prints the header of its first start and the run's cost.
+run_scene_once() {  # run_scene_once FLUME SCENE OUT THREADS
+  local flume=$1 scene=$2 out=$3 threads=$4
+  mkdir -p "$out"
+  [[ -f $out/header.txt ]] || measured_on "$flume" "$threads" >"$out/header.txt"
+  if ! grep -qs '"status": "ok"' "$out/run.json"; then
+    OMP_WAIT_POLICY=PASSIVE /usr/bin/time -o "$out.time" -f '%e s wall, %U s user, %S s system' \
+      "$flume" run "$scene" --out "$out" --quiet --threads "$threads"
+  fi
+  cat "$out/header.txt"
+  echo
+  echo "cost: $(jq -c .cost "$out/run.json"); $(cat "$out.time" 2>/dev/null)"
+  echo
+}
 if [[ ${BASH_SOURCE[0]} == "$0" ]]; then measured_on "${1:-build/bin/flume}" "${2:-${OMP_NUM_THREADS:-?}}"; fi

@@ -9,17 +9,7 @@ source "$root/docs/measured_on.sh"
 flume=$(realpath "${1:-$root/build/bin/flume}")
 out=$(realpath -m "${2:-bore-container}")
 threads=${THREADS:-1}
-mkdir -p "$out"
-[[ -f $out/header.txt ]] || measured_on "$flume" "$threads" >"$out/header.txt"  # the first start's
-header=$(cat "$out/header.txt")
-if ! grep -qs '"status": "ok"' "$out/run.json"; then
-  OMP_WAIT_POLICY=PASSIVE /usr/bin/time -o "$out.time" -f '%e s wall, %U s user, %S s system' \
-    "$flume" run "$root/scenes/debris/bore_container.json" --out "$out" --quiet --threads "$threads"
-fi
-echo "$header"
-echo
-echo "cost: $(jq -c .cost "$out/run.json"); $(cat "$out.time" 2>/dev/null)"
-echo
+run_scene_once "$flume" "$root/scenes/debris/bore_container.json" "$out" "$threads"
 echo "| debris | run-up (m) | at (s) | longitudinal at 2 s (m) | lateral at 2 s (m) | speed at 2 s (m/s) | accelerometer native / 30 Hz (N) |"
 echo "|---|---|---|---|---|---|---|"
 for d in D1 D2; do

@@ -10,17 +10,7 @@ source "$root/docs/measured_on.sh"
 flume=$(realpath "${1:-$root/build/bin/flume}")
 out=$(realpath -m "${2:-waseda-strip}")
 threads=${THREADS:-1}
-mkdir -p "$out"
-[[ -f $out/header.txt ]] || measured_on "$flume" "$threads" >"$out/header.txt"  # the first start's
-header=$(cat "$out/header.txt")
-if ! grep -qs '"status": "ok"' "$out/run.json"; then
-  OMP_WAIT_POLICY=PASSIVE /usr/bin/time -o "$out.time" -f '%e s wall, %U s user, %S s system' \
-    "$flume" run "$root/scenes/waseda/waseda_strip.json" --out "$out" --quiet --threads "$threads"
-fi
-echo "$header"
-echo
-echo "cost: $(jq -c .cost "$out/run.json"); $(cat "$out.time" 2>/dev/null)"
-echo
+run_scene_once "$flume" "$root/scenes/waseda/waseda_strip.json" "$out" "$threads"
 echo "| debris | longitudinal max (m) | at (s) | lateral at run-up (m) | spreading at run-up (deg) | speed at 6 s (m/s) | at rest |"
 echo "|---|---|---|---|---|---|---|"
 for d in D1 D2 D3; do
