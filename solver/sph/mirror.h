@@ -49,7 +49,10 @@ FLUME_HD void add_reflected(int axis, const Accum<D, T>& m, Accum<D, T>& A) {
   for (int d = 0; d < D; ++d) {
     A.acc[d] += d == axis ? -m.acc[d] : m.acc[d];
     A.gradc[d] += d == axis ? -m.gradc[d] : m.gradc[d];
-    for (int e = 0; e < D; ++e) A.gradv[d * D + e] += ((d == axis) != (e == axis)) ? -m.gradv[d * D + e] : m.gradv[d * D + e];
+    for (int e = 0; e < D; ++e) {
+      const T g = m.gradv[d * D + e];
+      A.gradv[d * D + e] += ((d == axis) != (e == axis)) ? -g : g;
+    }
   }
   A.drho += m.drho;
   A.divr += m.divr;

@@ -5,9 +5,10 @@
 // Read where the theory holds: downstream of the dam (x >= 8 m), 1-3 s, where it gives more than 0.05 m (over a
 // cell at dx = 0.0375 m). Upstream of the dam the drawdown lags the theory's instantaneous fan by the column's
 // initial collapse, a non-hydrostatic delay the theory has no place for (mean +6 / +9 / +10 mm at x = 6 m at
-// dx 0.075 / 0.0375 / 0.01875 m: it does not shrink with dx; the theory's error, not the method's). Near the front the sheet is thinner than a
-// particle, and the 5 mm contour's lag converges with dx instead (docs). Bound: half a particle spacing, what a
-// gauge reading a volume of particles resolves (9.4 mm at dx = 0.0375 m, two particles a cell).
+// dx 0.075 / 0.0375 / 0.01875 m: it does not shrink with dx; the theory's error, not the method's). Near the front
+// the sheet is thinner than a particle, and the 5 mm contour's lag converges with dx instead (docs). Bound: half a
+// particle spacing, what a gauge reading a volume of particles resolves (9.4 mm at dx = 0.0375 m, two particles a
+// cell).
 #include <gtest/gtest.h>
 
 #include <cmath>
