@@ -271,6 +271,25 @@ void DebrisCoupling::exchange(std::vector<CouplingNode>& nodes, double dt) {
   recorder_->record();
 }
 
+std::vector<Vector6d> DebrisCoupling::film(const std::vector<CouplingNode>& points) {
+  const int nb = body_count();
+  std::vector<std::vector<size_t>> of(nb);
+  for (size_t i = 0; i < points.size(); ++i) of[points[i].body].push_back(i);
+  std::vector<Vector6d> load(nb);
+  film_loads(points, of, load);
+  for (int b = 0; b < nb; ++b) film_force_[b] = load[b].head<3>();
+  return load;
+}
+
+void DebrisCoupling::step_with_loads(const std::vector<Vector6d>& load, double dt) {
+  for (int b = 0; b < body_count(); ++b) {
+    water_force_[b] = load[b].head<3>();
+    world_.apply_external(b, load[b].head<3>(), load[b].tail<3>());
+  }
+  world_.step(dt);
+  recorder_->record();
+}
+
 void DebrisCoupling::add_particle_impulse(int body, const double impulse[3], const double moment[3]) {
   const Eigen::Vector3d J(impulse[0], impulse[1], impulse[2]), L(moment[0], moment[1], moment[2]);
   const Eigen::Vector3d c(world_.box_view(body).centre[0], world_.box_view(body).centre[1],

@@ -76,6 +76,16 @@ class DebrisCoupling {
   // and steps the boxes by dt; records the trajectories.
   void exchange(std::vector<CouplingNode>& nodes, double dt);
 
+  // For a method that sums the water's loads itself (SPH, over each box's boundary particles): load[b] is the
+  // water's force (N) and torque about the centre (N m) on box b over the next dt, world frame. Applies them,
+  // steps the boxes by dt and records the trajectories.
+  void step_with_loads(const std::vector<Eigen::Matrix<double, 6, 1>>& load, double dt);
+
+  // The film under each resting box (the header) from water points round the boxes, each with its body,
+  // position, mass and pressure: for SPH, the particles within a cell of a box. Returns each body's film load
+  // (force, torque about the centre; a supporting box takes the reaction) and records the film's force.
+  std::vector<Eigen::Matrix<double, 6, 1>> film(const std::vector<CouplingNode>& points);
+
   // Water particles found inside a box after G2P are put back on its surface, their velocity's approach
   // removed (debris_coupling.cpp); the momentum they lose goes to the box in the next exchange. `impulse` is
   // the box's share (N s, world frame) and `moment` its moment about the origin (sum of x cross impulse).

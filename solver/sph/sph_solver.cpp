@@ -17,12 +17,15 @@
 #include "common/errors.h"
 #include "solver/interleave_axes.h"
 #include "solver/checkpoint.h"
+#include "solver/debris_coupling.h"
 #include "solver/instruments.h"
 #include "solver/seeding.h"
 #include "solver/simulation.h"
 #include "solver/sph/boundary_particles.h"
 #include "solver/sph/cell_list.h"
+#include "solver/sph/debris_particles.h"
 #include "solver/sph/mirror.h"
+#include "solver/sph/sph_debris.h"
 #include "solver/sph/sph_kernels.h"
 #include "solver/sph/sph_launch.h"
 
@@ -49,8 +52,10 @@ class SphSolver final : public Simulation {
     const int per_axis = static_cast<int>(std::lround(std::pow(scene.solver.ppc, 1.0 / D)));
     spacing_ = scene.solver.dx / per_axis;
     setup_params();
+    if (scene.debris.present) debris_ = std::make_unique<DebrisCoupling>(scene);
     seed_fluid();
     seed_walls();
+    seed_debris();
     const Energy e = energy();
     energy0_ = e.total();
     // Slack of the energy audit, as MPM's: SPH with viscosity and density diffusion dissipates, so the total
@@ -68,9 +73,9 @@ class SphSolver final : public Simulation {
 
   RunStatus step() override {
     if (status_ != RunStatus::kRunning) return status_;
-    if (!sort_fluid()) return status_;
+    if (!sort_fluid() || !sort_debris()) return status_;
     // The accelerations at t (the predictor's), then the step they allow.
-    evaluate(x_, v_, rho_, rhow_, time_, false);
+    evaluate(x_, v_, rho_, rhow_, bodies_.x, bodies_.rho, time_, false);
     double dt = step_size();
     const double remaining = scene_.solver.end_time - time_;
     if (dt >= remaining) dt = remaining;
@@ -85,9 +90,10 @@ class SphSolver final : public Simulation {
       rhoh_[i] = rho_[i] + h * drho_[i];
     });
     sph::parallel_for(nw_, [&](size_t k) { rhowh_[k] = std::max(T(P_.rho0), rhow_[k] + h * drhow_[k]); });
+    bodies_.predict(T(dt), P_.rho0);
     // The mid-step evaluation also sums the shifting's concentration gradient, as DualSPHysics' corrector
     // interaction does.
-    evaluate(xh_, vh_, rhoh_, rhowh_, time_ + 0.5 * dt, shifting_);
+    evaluate(xh_, vh_, rhoh_, rhowh_, bodies_.xh, bodies_.rhoh, time_ + 0.5 * dt, shifting_);
     // Corrector to t + dt with the mid-step rates; the hold's work on the water is energy supplied.
     const double lift = hold_lift(time_ + 0.5 * dt);
     double hold_work = 0;
@@ -106,6 +112,27 @@ class SphSolver final : public Simulation {
     sph::parallel_for(nw_, [&](size_t k) {
       rhow_[k] = std::max(T(P_.rho0), sph::correct_density(rhow_[k], rhowh_[k], drhow_[k], T(dt)));
     });
+    sph::parallel_for(bodies_.n, [&](size_t k) {
+      bodies_.rho[k] =
+          std::max(T(P_.rho0), sph::correct_density(bodies_.rho[k], bodies_.rhoh[k], bodies_.drho[k], T(dt)));
+    });
+    if (debris_) {  // the boxes take the mid-step load and the film's over the step; their particles follow
+      auto load = bodies_.loads(*debris_);
+      const auto film = debris_->film(film_points());
+      for (size_t b = 0; b < load.size(); ++b) load[b] += film[b];
+      std::vector<BodyState> before(load.size());
+      for (size_t b = 0; b < load.size(); ++b) before[b] = debris_->world().state(int(b));
+      debris_->step_with_loads(load, dt);
+      bodies_.place(*debris_);
+      // The film stands for water under the box that the particles do not resolve: its work on the boxes is
+      // energy supplied, as the hold's is.
+      for (size_t b = 0; b < load.size(); ++b) {
+        const BodyState after = debris_->world().state(int(b));
+        energy0_ += 0.5 * dt *
+                    (film[b].template head<3>().dot(before[b].velocity + after.velocity) +
+                     film[b].template tail<3>().dot(before[b].angular_velocity + after.angular_velocity));
+      }
+    }
     add_wall_impulses(dt);
     time_ += dt;
     dt_ = dt;
@@ -130,6 +157,8 @@ class SphSolver final : public Simulation {
   const Record& record() const override { return instruments_.record(); }
   const std::string& message() const override { return message_; }
   long neighbour_interactions() const override { return interactions_; }
+  const DebrisCoupling* debris() const override { return debris_.get(); }
+  DebrisCoupling* debris() override { return debris_.get(); }
 
   void particle_positions(std::vector<double>& xyz) const override {
     interleave_axes<D>(x_, n_, xyz);
@@ -146,7 +175,8 @@ class SphSolver final : public Simulation {
   }
   size_t active_blocks() const override { return grid_.count; }
   size_t particle_bytes() const override {
-    return n_ * sizeof(T) * (5 * D + 5 + 2 * kS + (shifting_ ? D + 1 : 0)) + nw_ * sizeof(T) * (2 * D + 5);
+    return n_ * sizeof(T) * (5 * D + 5 + 2 * kS + (shifting_ ? D + 1 : 0)) + nw_ * sizeof(T) * (2 * D + 5) +
+           bodies_.n * (sizeof(T) * (4 * D + 7) + sizeof(int) + 3 * sizeof(double));
   }
 
   void momentum(double linear[3], double angular[3]) const override {
@@ -215,17 +245,26 @@ class SphSolver final : public Simulation {
     for_each_particle_array([&](std::vector<T>& a, bool) { ar(a); });
     ar.expect("wall particles", nw_);
     ar(rhow_);
+    ar.expect("debris particles", bodies_.n);
+    for (auto& o : bodies_.offset) ar(o);
+    ar(bodies_.body);
+    ar(bodies_.mass);
+    ar(bodies_.rho);
+    if (debris_) debris_->checkpoint(ar);
     ar.fields(time_, dt_, max_speed_, steps_, interactions_, energy0_, energy_slack_, last_energy_, mass_total_,
               status_, message_);
     instruments_.checkpoint(ar);
     if (!ar.loading()) return;
     const size_t n = x_[0].size();
-    bool mismatch = rhow_.size() != nw_;
+    bool mismatch = rhow_.size() != nw_ || bodies_.body.size() != bodies_.n || bodies_.mass.size() != bodies_.n ||
+                    bodies_.rho.size() != bodies_.n;
+    for (const auto& o : bodies_.offset) mismatch = mismatch || o.size() != bodies_.n;
     for_each_particle_array([&](std::vector<T>& a, bool optional) {
       mismatch = mismatch || ((!optional || !a.empty()) && a.size() != n);
     });
     if (mismatch || n != n_) ar.fail("particles", "particle arrays of another length than the scene seeds");
     if (status_ == RunStatus::kUnstable) ar.fail("status", "the checkpointed run had gone unstable");
+    if (debris_) bodies_.place(*debris_);
     // A finished run resumed to a later end time runs on.
     status_ = time_ < scene_.solver.end_time - 1e-12 ? RunStatus::kRunning : RunStatus::kOk;
   }
@@ -239,8 +278,8 @@ class SphSolver final : public Simulation {
   double max_speed() const { return max_speed_; }
 
   struct Energy {
-    double kinetic = 0, potential = 0, elastic = 0;
-    double total() const { return kinetic + potential + elastic; }
+    double kinetic = 0, potential = 0, elastic = 0, debris = 0;
+    double total() const { return kinetic + potential + elastic + debris; }
   };
   Energy energy() const {
     double ke = 0, pe = 0, el = 0;
@@ -256,15 +295,13 @@ class SphSolver final : public Simulation {
       pe -= m * gx;
       el += m * sph::tait_energy_per_mass(rho_[i], Pd_.rho0, Pd_.B, Pd_.gamma);
     }
-    return {ke, pe, el};
+    return {ke, pe, el, debris_ ? debris_->energy() : 0.0};
   }
   const Energy& last_energy() const { return last_energy_; }
 
  private:
   void refuse_unsupported() const {
     const std::string why = " (solver.method sph; docs/sph.md lists what SPH does not do yet)";
-    if (scene_.debris.present)
-      throw InputError(scene_.file, "debris", "SPH does not couple debris yet" + why);
     if (scene_.inflow.present)
       throw InputError(scene_.file, "inflow", "SPH has no inflow boundary yet" + why);
   }
@@ -335,7 +372,7 @@ class SphSolver final : public Simulation {
   }
 
   void seed_fluid() {
-    const Seeds seeds = seed_water<D>(scene_, spacing_);
+    const Seeds seeds = seed_water<D>(scene_, spacing_, displaced_by<D>(debris_.get()));
     n_ = seeds.size();
     if (n_ == 0) throw InputError(scene_.file, "water", "no water to simulate");
     if (n_ > std::numeric_limits<uint32_t>::max() / 2)
@@ -424,6 +461,49 @@ class SphSolver final : public Simulation {
     load_impulse_.assign(scene_.boundaries.size() * D, 0.0);
   }
 
+  // The debris boxes' particles (sph/debris_particles.h), as deep as the walls', at the boxes' start poses.
+  void seed_debris() {
+    if (!debris_) return;
+    const int layers = static_cast<int>(std::ceil(2 * h_ / spacing_));
+    bodies_.seed(sph::make_debris_particles(scene_, spacing_, layers), T(scene_.fluid.density));
+    bodies_.place(*debris_);
+  }
+
+  // The water round the boxes for the film under a resting box (debris_coupling.h): the fluid particles
+  // within a cell of a box at the mid-step, with their pressures there, in particle order.
+  std::vector<CouplingNode> film_points() const {
+    const double band = scene_.solver.dx;
+    std::vector<int> owner(n_, -1);
+    sph::parallel_for(n_, [&](size_t i) {
+      double x[3] = {0, 0, 0}, nrm[3];
+      for (int d = 0; d < D; ++d) x[d] = xh_[d][i];
+      owner[i] = debris_->locate(x, band, nrm);
+    });
+    std::vector<CouplingNode> points;
+    for (size_t i = 0; i < n_; ++i) {
+      if (owner[i] < 0) continue;
+      CouplingNode c;
+      c.id = i;
+      c.body = owner[i];
+      for (int d = 0; d < D; ++d) c.x[d] = xh_[d][i];
+      c.m = mass_[i];
+      c.p = pf_[i];
+      points.push_back(c);
+    }
+    return points;
+  }
+
+  // Orders the debris particles by cell. False (and unstable) when one has left the cell grid.
+  bool sort_debris() {
+    if (bodies_.n == 0) return true;
+    if (bodies_.sort(grid_)) return true;
+    std::ostringstream s;
+    s.precision(4);
+    s << "a debris box left the domain at t = " << time_ << " s (step " << steps_ << ")";
+    fail(s.str());
+    return false;
+  }
+
   // Orders the fluid particles by cell. False (and unstable) when one has left the domain.
   bool sort_fluid() {
     auto& cell = fluid_list_.cell;
@@ -477,9 +557,11 @@ class SphSolver final : public Simulation {
   }
 
   // The rates at one state: accelerations and density rates of the fluid, density rates and forces of the
-  // walls; with `shift_sums`, the shifting's grad C and div r of the fluid too.
+  // walls and of the debris particles (at XB, densities RB); with `shift_sums`, the shifting's grad C and div r
+  // of the fluid too.
   void evaluate(const std::vector<T>* X, const std::vector<T>* V, const std::vector<T>& R,
-                const std::vector<T>& RW, double t, bool shift_sums) {
+                const std::vector<T>& RW, const std::vector<T>* XB, const std::vector<T>& RB, double t,
+                bool shift_sums) {
     const sph::Params<T> P = P_;
     sph::parallel_for(n_, [&](size_t i) {
       pf_[i] = sph::tait_pressure(R[i], P);
@@ -488,6 +570,11 @@ class SphSolver final : public Simulation {
     sph::parallel_for(nw_, [&](size_t k) {
       pw_[k] = sph::tait_pressure(RW[k], P);
       irw_[k] = T(1) / RW[k];
+    });
+    auto& B = bodies_;
+    sph::parallel_for(B.n, [&](size_t k) {
+      B.p[k] = sph::tait_pressure(RB[k], P);
+      B.ir[k] = T(1) / RB[k];
     });
     const T lift = T(hold_lift(t));
     const bool sps = !artificial_;
@@ -512,6 +599,11 @@ class SphSolver final : public Simulation {
         for_pairs(wall_list_, xw_, vw_, x, v, [&](uint32_t b, const T* rab, T r2, const T* vab, T F) {
           sph::pair_common<D, T>(Q, rab, r2, F, vab, rho_a, ira, p_a, RW[b], irw_[b], pw_[b], mw_, A);
           if (shift_sums) sph::pair_shift<D, T>(rab, r2, F, mw_ * irw_[b], A);
+        });
+        if (B.n == 0) return;
+        for_pairs(B.list, XB, B.v, x, v, [&](uint32_t b, const T* rab, T r2, const T* vab, T F) {
+          sph::pair_common<D, T>(Q, rab, r2, F, vab, rho_a, ira, p_a, RB[b], B.ir[b], B.p[b], B.mass[b], A);
+          if (shift_sums) sph::pair_shift<D, T>(rab, r2, F, B.mass[b] * B.ir[b], A);
         });
       };
       Accum<D, T> A;
@@ -542,33 +634,40 @@ class SphSolver final : public Simulation {
     });
     if (sps)
       for (int k = 0; k < kS; ++k) tau_[k].swap(tau_next_[k]);
-    // Walls: density from the fluid around them (continuity only); the pair force on each, which is the
-    // opposite of what it exerts on the fluid (the pair terms are antisymmetric), for the load cells.
-    sph::parallel_for(nw_, [&](size_t k) {
-      T xk[D], vk[D];
-      for (int d = 0; d < D; ++d) {
-        xk[d] = xw_[d][k];
-        vk[d] = vw_[d][k];
-      }
-      const T rho_k = RW[k], p_k = pw_[k];
-      auto gather = [&](const T* x, const T* v, Accum<D, T>& A) {
-        for_pairs(fluid_list_, X, V, x, v, [&](uint32_t b, const T* rab, T r2, const T* vab, T F) {
-          sph::pair_common<D, T>(P, rab, r2, F, vab, rho_k, irw_[k], p_k, R[b], irf_[b], pf_[b], mass_[b], A);
-        });
-      };
-      Accum<D, T> A;
-      gather(xk, vk, A);
-      if (near_mirror(xk)) {
-        T xm[D], vm[D];
-        sph::reflect_point<D>(mirror_.axis, T(mirror_.at), xk, xm);
-        sph::reflect_vector<D>(mirror_.axis, vk, vm);
-        Accum<D, T> M;
-        gather(xm, vm, M);
-        sph::add_reflected(mirror_.axis, M, A);
-      }
-      drhow_[k] = A.drho;
-      for (int d = 0; d < D; ++d) fw_[d][k] = mw_ * A.acc[d];
-    });
+    // Walls and debris particles: density from the fluid around them (continuity only); the pair force on
+    // each, which is the opposite of what it exerts on the fluid (the pair terms are antisymmetric), for the
+    // load cells and the boxes' loads.
+    auto boundary_rates = [&](size_t count, const std::vector<T>* XK, const std::vector<T>* VK,
+                              const std::vector<T>& RK, const std::vector<T>& irk, const std::vector<T>& pk,
+                              const auto& mass_of, std::vector<T>& drho_out, std::vector<T>* f_out) {
+      sph::parallel_for(count, [&](size_t k) {
+        T xk[D], vk[D];
+        for (int d = 0; d < D; ++d) {
+          xk[d] = XK[d][k];
+          vk[d] = VK[d][k];
+        }
+        const T rho_k = RK[k], p_k = pk[k];
+        auto gather = [&](const T* x, const T* v, Accum<D, T>& A) {
+          for_pairs(fluid_list_, X, V, x, v, [&](uint32_t b, const T* rab, T r2, const T* vab, T F) {
+            sph::pair_common<D, T>(P, rab, r2, F, vab, rho_k, irk[k], p_k, R[b], irf_[b], pf_[b], mass_[b], A);
+          });
+        };
+        Accum<D, T> A;
+        gather(xk, vk, A);
+        if (near_mirror(xk)) {
+          T xm[D], vm[D];
+          sph::reflect_point<D>(mirror_.axis, T(mirror_.at), xk, xm);
+          sph::reflect_vector<D>(mirror_.axis, vk, vm);
+          Accum<D, T> M;
+          gather(xm, vm, M);
+          sph::add_reflected(mirror_.axis, M, A);
+        }
+        drho_out[k] = A.drho;
+        for (int d = 0; d < D; ++d) f_out[d][k] = mass_of(k) * A.acc[d];
+      });
+    };
+    boundary_rates(nw_, xw_, vw_, RW, irw_, pw_, [&](size_t) { return mw_; }, drhow_, fw_);
+    boundary_rates(B.n, XB, B.v, RB, B.ir, B.p, [&](size_t k) { return B.mass[k]; }, B.drho, B.f);
     long pairs = 0;
 #pragma omp parallel for reduction(+ : pairs) schedule(static)
     for (long i = 0; i < long(n_); ++i) pairs += pairs_[i];
@@ -638,11 +737,14 @@ class SphSolver final : public Simulation {
     }));
     const double vdt = sph::parallel_max<double>(n_, [&](size_t i) { return double(visc_dt_[i]); });
     update_max_speed();
+    // The boxes' particles must not drift past the search's margin either.
+    const double body_speed = std::sqrt(bodies_.max_speed2());
     const double dt_f = amax > 0 ? std::sqrt(h_ / amax) : 1e300;
     const double dt_cv = h_ / (Pd_.c0 + h_ * vdt);
     double dt = scene_.sph.cfl * std::min(dt_f, dt_cv);
     dt = std::min(dt, scene_.solver.max_dt);
     if (max_speed_ > 0) dt = std::min(dt, kDriftOverH * h_ / max_speed_);
+    if (body_speed > 0) dt = std::min(dt, kDriftOverH * h_ / body_speed);
     return dt;
   }
 
@@ -723,6 +825,10 @@ class SphSolver final : public Simulation {
   std::vector<T> xw_[D], vw_[D], rhow_, rhowh_, drhow_, pw_, irw_, fw_[D];
   std::vector<int> wall_id_;
   T mw_ = 0;
+
+  // Debris: the boxes (Bullet) and their boundary particles; empty without debris.
+  std::unique_ptr<DebrisCoupling> debris_;
+  sph::SphDebris<D, T> bodies_;
   std::vector<double> load_impulse_;
 
   double time_ = 0, dt_ = 0, max_speed_ = 0;
