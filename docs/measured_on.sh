@@ -22,14 +22,15 @@ measured_on() {  # measured_on FLUME THREADS
 }
 
 # Runs SCENE into OUT unless OUT already holds a finished run (a killed script resumes where it stopped), then
-# prints the header of its first start and the run's cost.
-run_scene_once() {  # run_scene_once FLUME SCENE OUT THREADS
+# prints the header of its first start and the run's cost. Arguments after THREADS go to `flume run` (--set ...).
+run_scene_once() {  # run_scene_once FLUME SCENE OUT THREADS [RUN ARGUMENTS...]
   local flume=$1 scene=$2 out=$3 threads=$4
+  shift 4
   mkdir -p "$out"
   [[ -f $out/header.txt ]] || measured_on "$flume" "$threads" >"$out/header.txt"
   if ! grep -qs '"status": "ok"' "$out/run.json"; then
     OMP_WAIT_POLICY=PASSIVE /usr/bin/time -o "$out.time" -f '%e s wall, %U s user, %S s system' \
-      "$flume" run "$scene" --out "$out" --quiet --threads "$threads"
+      "$flume" run "$scene" --out "$out" --quiet --threads "$threads" "$@"
   fi
   cat "$out/header.txt"
   echo
