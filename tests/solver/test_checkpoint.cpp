@@ -245,6 +245,13 @@ TEST(Checkpoint, ResumedFloatingBoxRepeatsTheUninterruptedRun) {
                                        "floating");
   expect_exact_resume(scene, 0.05);
 }
+// The same with SPH: the boxes' particles (their order, offsets and densities) and the film are state too.
+TEST(Checkpoint, SphResumedFloatingBoxRepeatsTheUninterruptedRun) {
+  const double depth = 0.15, H = 0.08;
+  const Scene scene = parse_scene_text(test::tank_scene(0.3, depth, H, 419.0, depth - 0.04 + H / 2, 0.03, 0.03),
+                                       "floating", {parse_override("solver.method=sph")});
+  expect_exact_resume(scene, 0.015);
+}
 #ifdef FLUME_CUDA_EMULATION_AVAILABLE
 TEST(Checkpoint, CudaEmulationResumedFloatingBoxRepeatsTheUninterruptedRun) {
   const double depth = 0.15, H = 0.08;
