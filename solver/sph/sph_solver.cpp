@@ -112,27 +112,7 @@ class SphSolver final : public Simulation {
     sph::parallel_for(nw_, [&](size_t k) {
       rhow_[k] = std::max(T(P_.rho0), sph::correct_density(rhow_[k], rhowh_[k], drhow_[k], T(dt)));
     });
-    sph::parallel_for(bodies_.n, [&](size_t k) {
-      bodies_.rho[k] =
-          std::max(T(P_.rho0), sph::correct_density(bodies_.rho[k], bodies_.rhoh[k], bodies_.drho[k], T(dt)));
-    });
-    if (debris_) {  // the boxes take the mid-step load and the film's over the step; their particles follow
-      auto load = bodies_.loads(*debris_);
-      const auto film = debris_->film(film_points());
-      for (size_t b = 0; b < load.size(); ++b) load[b] += film[b];
-      std::vector<BodyState> before(load.size());
-      for (size_t b = 0; b < load.size(); ++b) before[b] = debris_->world().state(int(b));
-      debris_->step_with_loads(load, dt);
-      bodies_.place(*debris_);
-      // The film stands for water under the box that the particles do not resolve: its work on the boxes is
-      // energy supplied, as the hold's is.
-      for (size_t b = 0; b < load.size(); ++b) {
-        const BodyState after = debris_->world().state(int(b));
-        energy0_ += 0.5 * dt *
-                    (film[b].template head<3>().dot(before[b].velocity + after.velocity) +
-                     film[b].template tail<3>().dot(before[b].angular_velocity + after.angular_velocity));
-      }
-    }
+    if (debris_) step_debris(dt);
     add_wall_impulses(dt);
     time_ += dt;
     dt_ = dt;
@@ -467,6 +447,31 @@ class SphSolver final : public Simulation {
     const int layers = static_cast<int>(std::ceil(2 * h_ / spacing_));
     bodies_.seed(sph::make_debris_particles(scene_, spacing_, layers), T(scene_.fluid.density));
     bodies_.place(*debris_);
+  }
+
+  // The debris' step (sph_debris.h): their particles' densities corrected, the boxes moved by the water's
+  // mid-step load and the film's, the particles placed on the boxes' new poses.
+  void step_debris(double dt) {
+    sph::parallel_for(bodies_.n, [&](size_t k) {
+      bodies_.rho[k] =
+          std::max(T(P_.rho0), sph::correct_density(bodies_.rho[k], bodies_.rhoh[k], bodies_.drho[k], T(dt)));
+    });
+    // The boxes take the mid-step load and the film's over the step; their particles follow.
+    auto load = bodies_.loads(*debris_);
+    const auto film = debris_->film(film_points());
+    for (size_t b = 0; b < load.size(); ++b) load[b] += film[b];
+    std::vector<BodyState> before(load.size());
+    for (size_t b = 0; b < load.size(); ++b) before[b] = debris_->world().state(int(b));
+    debris_->step_with_loads(load, dt);
+    bodies_.place(*debris_);
+    // The film stands for water under the box that the particles do not resolve: its work on the boxes is
+    // energy supplied, as the hold's is.
+    for (size_t b = 0; b < load.size(); ++b) {
+      const BodyState after = debris_->world().state(int(b));
+      energy0_ += 0.5 * dt *
+                  (film[b].template head<3>().dot(before[b].velocity + after.velocity) +
+                   film[b].template tail<3>().dot(before[b].angular_velocity + after.angular_velocity));
+    }
   }
 
   // The water round the boxes for the film under a resting box (debris_coupling.h): the fluid particles
