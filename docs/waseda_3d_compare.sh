@@ -7,29 +7,36 @@
 #     paper's range) and the run lasts END_TIME (default 4.5 s): with the default 0.10 m gate only a film (under a
 #     cell) reaches WG3 at this dx and none reaches WG4 within 5 s, in 2D or 3D. About 40 min on 2 cores.
 #   docs/waseda_3d_compare.sh [FLUME] [OUT] [PART: 1|2|all]
+# THREADS (environment): OpenMP threads per run (default: the spec's 2 in part 1, 2 in part 2). Each part prints
+# its results headed by the commit and the machine (docs/measured_on.sh); part 1 by docs/tradeoff/study.sh, into
+# OUT/half_vs_full. One thread on the 2-core VM: part 1 about 30 min, part 2 about 1 h.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
+source "$root/docs/measured_on.sh"
 flume=$(realpath "${1:-$root/build/bin/flume}")
 out=$(realpath -m "${2:-waseda-3d-compare}")
 part=${3:-all}
+threads=${THREADS:-2}
 gate=${GATE:-0.14}
 end_time=${END_TIME:-4.5}
 mkdir -p "$out"
 export OMP_WAIT_POLICY=PASSIVE
 if [[ $part == 1 || $part == all ]]; then
-  "$flume" study tradeoff "$root/scenes/studies/waseda_half_vs_full_dx004.json" --db "$out/half_vs_full.sqlite" \
-    --out "$out/half_vs_full"
+  "$root/docs/tradeoff/study.sh" "$root/scenes/studies/waseda_half_vs_full_dx004.json" "$flume" "$out/half_vs_full"
 fi
 if [[ $part == 2 || $part == all ]]; then
+  [[ -f $out/apron_header.txt ]] || measured_on "$flume" "$threads" >"$out/apron_header.txt"  # the first start's
+  cat "$out/apron_header.txt"
+  echo
   feed=$out/half_dx003_g${gate}_t${end_time}
   if [[ ! -f $feed/run.json ]] || ! grep -q '"status": "ok"' "$feed/run.json"; then
-    "$flume" run "$root/scenes/waseda/waseda_3d_half.json" --out "$feed" --threads 2 \
+    "$flume" run "$root/scenes/waseda/waseda_3d_half.json" --out "$feed" --threads "$threads" \
       --set solver.dx=0.03 --set solver.end_time="$end_time" --set reservoir.gate_height_m="$gate"
   fi
   "$flume" calibrate target "$feed/result.h5" --out "$out/half_wg34.csv" --gauge WG3 --gauge WG4
   apron=$out/apron_dx003_g${gate}_t${end_time}
   if [[ ! -f $apron/run.json ]] || ! grep -q '"status": "ok"' "$apron/run.json"; then
-    "$flume" run "$root/scenes/waseda/waseda_apron.json" --out "$apron" --threads 2 --set basin.span=half \
+    "$flume" run "$root/scenes/waseda/waseda_apron.json" --out "$apron" --threads "$threads" --set basin.span=half \
       --set solver.dx=0.03 --set solver.end_time="$end_time" --set "inflow.record=$feed/result.h5"
   fi
   "$flume" calibrate target "$apron/result.h5" --out "$out/apron_wg34.csv" --gauge WG3 --gauge WG4
