@@ -5,31 +5,40 @@
 #  2. waseda_apron (half span, x >= 4.35 m) fed bin by bin from the apron_inflow section of a waseda_3d_half run
 #     at dx 0.03 m, against that run's WG3 and WG4. The gate is opened to GATE (default 0.14 m, the top of the
 #     paper's range) and the run lasts END_TIME (default 4.5 s): with the default 0.10 m gate only a film (under a
-#     cell) reaches WG3 at this dx and none reaches WG4 within 5 s, in 2D or 3D. About 40 min on 2 cores.
+#     cell) reaches WG3 at this dx and none reaches WG4 within 5 s, in 2D or 3D. About 40 min on 2 cores. Draws
+#     both runs' WG3 and WG4 into docs/waseda_apron_3d.svg (FIG=0: into OUT instead).
 #   docs/waseda_3d_compare.sh [FLUME] [OUT] [PART: 1|2|all]
+# THREADS (environment): OpenMP threads per run (default: the spec's 2 in part 1, 2 in part 2). Each part prints
+# its results headed by the commit and the machine (docs/measured_on.sh); part 1 by docs/tradeoff/study.sh, into
+# OUT/half_vs_full. One thread on the 2-core VM beside another developer's jobs (2026-12-05): part 1 28 min,
+# part 2 36 min.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
+source "$root/docs/measured_on.sh"
 flume=$(realpath "${1:-$root/build/bin/flume}")
 out=$(realpath -m "${2:-waseda-3d-compare}")
 part=${3:-all}
+threads=${THREADS:-2}
 gate=${GATE:-0.14}
 end_time=${END_TIME:-4.5}
 mkdir -p "$out"
 export OMP_WAIT_POLICY=PASSIVE
 if [[ $part == 1 || $part == all ]]; then
-  "$flume" study tradeoff "$root/scenes/studies/waseda_half_vs_full_dx004.json" --db "$out/half_vs_full.sqlite" \
-    --out "$out/half_vs_full"
+  "$root/docs/tradeoff/study.sh" "$root/scenes/studies/waseda_half_vs_full_dx004.json" "$flume" "$out/half_vs_full"
 fi
 if [[ $part == 2 || $part == all ]]; then
+  [[ -f $out/apron_header.txt ]] || measured_on "$flume" "$threads" >"$out/apron_header.txt"  # the first start's
+  cat "$out/apron_header.txt"
+  echo
   feed=$out/half_dx003_g${gate}_t${end_time}
   if [[ ! -f $feed/run.json ]] || ! grep -q '"status": "ok"' "$feed/run.json"; then
-    "$flume" run "$root/scenes/waseda/waseda_3d_half.json" --out "$feed" --threads 2 \
+    "$flume" run "$root/scenes/waseda/waseda_3d_half.json" --out "$feed" --threads "$threads" \
       --set solver.dx=0.03 --set solver.end_time="$end_time" --set reservoir.gate_height_m="$gate"
   fi
   "$flume" calibrate target "$feed/result.h5" --out "$out/half_wg34.csv" --gauge WG3 --gauge WG4
   apron=$out/apron_dx003_g${gate}_t${end_time}
   if [[ ! -f $apron/run.json ]] || ! grep -q '"status": "ok"' "$apron/run.json"; then
-    "$flume" run "$root/scenes/waseda/waseda_apron.json" --out "$apron" --threads 2 --set basin.span=half \
+    "$flume" run "$root/scenes/waseda/waseda_apron.json" --out "$apron" --threads "$threads" --set basin.span=half \
       --set solver.dx=0.03 --set solver.end_time="$end_time" --set "inflow.record=$feed/result.h5"
   fi
   "$flume" calibrate target "$apron/result.h5" --out "$out/apron_wg34.csv" --gauge WG3 --gauge WG4
@@ -69,4 +78,9 @@ for c in costs:
 for k in ("wall_s", "particle_steps", "particles", "steps", "peak_rss_mb"):
     print(f"{k}: feed {costs[0][k]:.4g}, apron {costs[1][k]:.4g}, ratio {costs[1][k] / costs[0][k]:.3f}")
 PY
+  # The two runs' WG3 and WG4 in one figure, docs/waseda_apron_3d.svg (FIG=0: into OUT instead).
+  fig=$root/docs/waseda_apron_3d.svg
+  [[ ${FIG:-1} == 1 ]] || fig=$out/waseda_apron_3d.svg
+  "$flume" gauges "$feed=waseda_3d_half (feed)" "$apron=waseda_apron half span" --gauges WG3,WG4 \
+    --title "waseda_apron fed from waseda_3d_half, dx 0.03 m, gate $gate m" --out "$fig" >"$out/apron_gauges.txt"
 fi
