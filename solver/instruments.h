@@ -38,11 +38,12 @@ inline double ground_level(const Scene& s, const Vec3d& p) {
 }
 
 // Whether point p lies inside a solid of the scene (a boundary box, or behind a boundary plane) or outside the
-// domain box.
-inline bool inside_solid(const Scene& s, const Vec3d& p) {
+// domain box. Beyond a symmetry plane lies the water's mirror image, a solid only when `symmetry_is_solid`.
+inline bool inside_solid(const Scene& s, const Vec3d& p, bool symmetry_is_solid = true) {
   for (int d = 0; d < s.dimension; ++d)
     if (p[d] < s.domain_lo[d] || p[d] > s.domain_hi[d]) return true;
   for (const auto& b : s.boundaries) {
+    if (!symmetry_is_solid && b.condition == BoundaryCondition::kSymmetry) continue;
     const auto& sh = b.shape;
     if (sh.type == ShapeType::kBox) {
       bool in = true;
@@ -57,14 +58,29 @@ inline bool inside_solid(const Scene& s, const Vec3d& p) {
   return false;
 }
 
+// A gauge's image across a symmetry plane that its footprint (1.5 cells) reaches: the half-width scene's gauge
+// then also counts the water's mirror image (the particles summed at the image position), and reads as the
+// whole basin's gauge does. False when no plane is within reach.
+inline bool gauge_image(const Scene& s, const Vec3d& position, Vec3d& image) {
+  for (const auto& b : s.boundaries) {
+    if (b.condition != BoundaryCondition::kSymmetry || b.shape.type == ShapeType::kBox) continue;
+    double side = 0;
+    for (int d = 0; d < s.dimension - 1; ++d) side += (position[d] - b.shape.point[d]) * b.shape.normal[d];
+    if (side >= 1.5 * s.solver.dx) continue;
+    image = position;
+    for (int d = 0; d < s.dimension - 1; ++d) image[d] -= 2 * side * b.shape.normal[d];
+    return true;
+  }
+  return false;
+}
+
 // The share of a gauge's horizontal B-spline footprint (1.5 cells each way) that water can occupy: 1 in open
-// water, about 1/2 for a gauge on a wall. The gauge divides the water volume it counts by it, so a gauge next to
+// water, about 1/2 for a gauge on a wall (a symmetry plane is not a wall: the gauge counts the image beyond it). The gauge divides the water volume it counts by it, so a gauge next to
 // a wall reads the depth, not a part of it. The share is summed over the points where the particles of water at
 // rest sit, the seeding lattice (ppc^(1/D) per cell and axis, at (k + 1/2) spacings from the frame's origin, as
 // for water boxes that start on a multiple of the spacing, as the basin's do), just above the ground: the gauge
 // sums point weights of particles, and the continuous integral of the truncated B-spline differs from that sum
-// (a gauge half a cell from a wall, as the half basin's WG1 beside its symmetry plane, read 1.2 % of the depth
-// too high with it: +2.7 mm at t = 0). Over the whole lattice the weights add up to exactly ppc^((D-1)/D) per
+// (a gauge half a cell from a wall read 1.2 % of the depth too high with it: +2.7 mm at t = 0). Over the whole lattice the weights add up to exactly ppc^((D-1)/D) per
 // cell area whatever the gauge's position, so in open water the share is 1 to round-off.
 inline double gauge_open_fraction(const Scene& s, const Vec3d& position, double ground) {
   const int up = s.dimension - 1;
@@ -89,7 +105,7 @@ inline double gauge_open_fraction(const Scene& s, const Vec3d& position, double 
       if (up == 2) p[1] = pb;
       p[up] = ground + 0.5 * dx;
       all += w;
-      if (!inside_solid(s, p)) open += w;
+      if (!inside_solid(s, p, false)) open += w;
     }
   return all > 0 ? open / all : 0.0;
 }
@@ -104,6 +120,9 @@ class InstrumentSet {
       gauges_.push_back({g.name, 1.0 / g.rate_hz, 0.0});
       ground_.push_back(ground_level(scene, g.position));
       open_.push_back(gauge_open_fraction(scene, g.position, ground_.back()));
+      Vec3d image{};
+      has_image_.push_back(gauge_image(scene, g.position, image));
+      image_.push_back(image);
     }
     for (const auto& p : scene.instruments.probes) {
       record_.probes[p.name].components = D;
@@ -244,6 +263,13 @@ class InstrumentSet {
     term.lowest = ground_[k] - 0.25 * dx;  // water below the ground here is beside the gauge, not under it
     double weight;
     sum_particles(s, term, &weight);
+    if (has_image_[k]) {  // the water's mirror image across the symmetry plane
+      GaugeTerm mirrored = term;
+      for (int d = 0; d < up; ++d) mirrored.g[d] = image_[k][d];
+      double w;
+      sum_particles(s, mirrored, &w);
+      weight += w;
+    }
     const double area = up == 2 ? dx * dx : dx;
     const double depth = open_[k] > 0 ? weight / (area * open_[k]) : 0.0;
     return ground_[k] + depth;
@@ -307,6 +333,8 @@ class InstrumentSet {
   std::vector<Clock> gauges_, probes_, loads_, sections_;
   std::vector<double> acc_m_, acc_u_, acc_zm_, acc_zu_;
   std::vector<double> ground_, open_;  // per gauge: ground level, open share of its footprint
+  std::vector<char> has_image_;        // per gauge: whether its footprint reaches a symmetry plane,
+  std::vector<Vec3d> image_;           // and its image across it
   std::vector<double> heights_;        // a connected gauge's column (solver/connected_depth.h)
   PressureProbeSet<Solver> pressures_;
   std::vector<size_t> load_wall_;
