@@ -200,14 +200,24 @@ void DebrisCoupling::film_loads(const std::vector<CouplingNode>& nodes, const st
   }
 }
 
+std::vector<std::vector<size_t>> DebrisCoupling::points_of(const std::vector<CouplingNode>& points) const {
+  std::vector<std::vector<size_t>> of(body_count());
+  for (size_t i = 0; i < points.size(); ++i) of[points[i].body].push_back(i);
+  return of;
+}
+
+std::vector<Vector6d> DebrisCoupling::recorded_film(const std::vector<CouplingNode>& points,
+                                                    const std::vector<std::vector<size_t>>& of) {
+  std::vector<Vector6d> load(body_count());
+  film_loads(points, of, load);
+  for (int b = 0; b < body_count(); ++b) film_force_[b] = load[b].head<3>();
+  return load;
+}
+
 void DebrisCoupling::exchange(std::vector<CouplingNode>& nodes, double dt) {
   const int nb = body_count();
-  // Nodes of each body, in the given (grid) order.
-  std::vector<std::vector<size_t>> of(nb);
-  for (size_t i = 0; i < nodes.size(); ++i) of[nodes[i].body].push_back(i);
-  std::vector<Vector6d> film(nb);
-  film_loads(nodes, of, film);
-  for (int b = 0; b < nb; ++b) film_force_[b] = film[b].head<3>();
+  const auto of = points_of(nodes);  // the nodes of each body, in the given (grid) order
+  const std::vector<Vector6d> film = recorded_film(nodes, of);
   for (int b = 0; b < nb; ++b) {
     const BodyState s = world_.state(b);
     const double M = world_.mass(b);
@@ -272,13 +282,7 @@ void DebrisCoupling::exchange(std::vector<CouplingNode>& nodes, double dt) {
 }
 
 std::vector<Vector6d> DebrisCoupling::film(const std::vector<CouplingNode>& points) {
-  const int nb = body_count();
-  std::vector<std::vector<size_t>> of(nb);
-  for (size_t i = 0; i < points.size(); ++i) of[points[i].body].push_back(i);
-  std::vector<Vector6d> load(nb);
-  film_loads(points, of, load);
-  for (int b = 0; b < nb; ++b) film_force_[b] = load[b].head<3>();
-  return load;
+  return recorded_film(points, points_of(points));
 }
 
 void DebrisCoupling::step_with_loads(const std::vector<Vector6d>& load, double dt) {

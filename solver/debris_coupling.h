@@ -110,6 +110,11 @@ class DebrisCoupling {
   // The film's loads (force, torque about the centre) on every body, from the nodes of each (indices into nodes).
   void film_loads(const std::vector<CouplingNode>& nodes, const std::vector<std::vector<size_t>>& of,
                   std::vector<Eigen::Matrix<double, 6, 1>>& load);
+  // The indices of the points (nodes or particles) of each body, in their given order.
+  std::vector<std::vector<size_t>> points_of(const std::vector<CouplingNode>& points) const;
+  // film_loads, its forces recorded in film_force_.
+  std::vector<Eigen::Matrix<double, 6, 1>> recorded_film(const std::vector<CouplingNode>& points,
+                                                         const std::vector<std::vector<size_t>>& of);
   bool in_static_solid(const Eigen::Vector3d& x) const;
   int box_at(const Eigen::Vector3d& x, int skip) const;  // the debris box holding x (other than `skip`), or -1
 
