@@ -331,7 +331,9 @@ void expand_basin(json& root, Basin& B, const std::string& file, int dim) {
   if (bs.value("instruments", std::string("waseda")) == "waseda") {
     json& inst = root["instruments"];
     if (inst.is_null()) inst = json::object();
-    auto across = [&](double y) { return std::clamp(y, 0.5 * dx, W - 0.5 * dx); };
+    // Half a cell off a wall; on a symmetry plane a gauge counts the water's image (solver/instruments.h), so
+    // the half basin's WG1 stands on the centreline as the full basin's does.
+    auto across = [&](double y) { return std::clamp(y, 0.5 * dx, half ? W : W - 0.5 * dx); };
     auto horizontal = [&](double x, double y) { return dim == 2 ? json::array({x}) : json::array({x, across(y)}); };
     json gauges = json::array();
     const double wall_offset = 0.25;

@@ -135,11 +135,12 @@ TEST(Waseda, BasinGaugesReadStillWaterAtStart) {
   EXPECT_EQ(checked, 2);  // WG1 and WG2
 }
 
-// The same on the half basin's WG1, which sits half a cell from the symmetry plane: a gauge beside a wall divides
-// its volume by the open share of its footprint, and that share must be the one the gauge's own sum over the
-// particles gives at rest (solver/instruments.h, gauge_open_fraction). With the continuous integral of the
-// truncated B-spline instead, this gauge read 1.2 % of the depth too high (+2.7e-3 m). Across, the lattice is
-// whole (80 columns in 2 m); along x the tolerance is the one derived above.
+// The same on the half basin's WG1, which stands on the symmetry plane (the centreline, as the full basin's): its
+// footprint reaches across the plane, so it sums the water and the water's image there and counts the space
+// beyond the plane as open (solver/instruments.h, gauge_image), and reads still water as an open-water gauge
+// does. (Half a cell from the plane, where it stood while the plane counted as a wall, the open share had to be
+// the gauge's own sum over the lattice: with the continuous integral it read 1.2 % too high, +2.7e-3 m.) Across,
+// the lattice is whole (80 columns in 2 m); along x the tolerance is the one derived above.
 TEST(Waseda, GaugeBesideTheSymmetryPlaneReadsStillWaterAtStart) {
   const Scene scene = load_scene(std::string(FLUME_SOURCE_DIR) + "/scenes/waseda/waseda_3d_half.json",
                                  {{"solver.dx", "0.05"}, {"solver.end_time", "0.01"}});
@@ -147,7 +148,7 @@ TEST(Waseda, GaugeBesideTheSymmetryPlaneReadsStillWaterAtStart) {
   const double dx = scene.solver.dx, s = dx / 2, H = scene.basin.still_water_m;
   const auto& g = scene.instruments.gauges.at(0);
   ASSERT_EQ(g.name, "WG1");
-  ASSERT_NEAR(g.position[1], 2.0 - dx / 2, 1e-12);  // half a cell from the plane at y = 2 m
+  ASSERT_NEAR(g.position[1], 2.0, 1e-12);  // on the plane at y = 2 m
   const WaterRegion* box = nullptr;
   for (const auto& w : scene.water)
     if (w.lo[0] <= g.position[0] - 1.5 * dx && g.position[0] + 1.5 * dx <= w.hi[0] && std::fabs(w.hi[2] - H) < 1e-12)
@@ -155,7 +156,7 @@ TEST(Waseda, GaugeBesideTheSymmetryPlaneReadsStillWaterAtStart) {
   ASSERT_NE(box, nullptr);
   const double sx = (box->hi[0] - box->lo[0]) / std::max(1L, std::lround((box->hi[0] - box->lo[0]) / s));
   const double alias = lattice_alias(dx, sx);
-  const double delta = std::ldexp(1.0, -23);  // half an ulp of a float in [1, 4): x = 1.85, y = 1.975
+  const double delta = std::ldexp(1.0, -23);  // half an ulp of a float in [1, 4): x = 1.85, y = 2
   const double tol = H * (alias + 2 * 2 * delta / dx + 6e-8);  // both axes' round-off
   const double eta = sim->record().gauges.at("WG1").at(0);
   std::printf("WG1 (half basin): eta(0) = %+.3e m (tolerance %.2e m)\n", eta, tol);
