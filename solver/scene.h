@@ -72,6 +72,7 @@ struct FluidSettings {
 // sit on the same lattice as MPM's (dx / ppc^(1/D) apart), so gauges and masses are the same.
 enum class SphViscosity { kLaminarSps, kArtificial };
 enum class SphShifting { kNone, kLind };
+enum class SphBoundary { kMdbc, kDbc };
 struct SphSettings {
   double coefh = 1.0;  // smoothing length h = coefh sqrt(D) spacing (DualSPHysics; the study: h = sqrt(3) spacing)
   double cfl = 0.2;    // dt = cfl min(sqrt(h / |a|max), h / (c0 + h max visc)) (DualSPHysics' step condition)
@@ -81,6 +82,8 @@ struct SphSettings {
   SphShifting shifting = SphShifting::kLind;  // particle shifting (Lind et al. 2012), as the study runs it
   double shifting_coef = 2.0;                 // A of dr = -A h |u| dt grad C (the study: 2)
   double shifting_threshold = 1.5;            // free surface below this div r (DualSPHysics: 1.5 2D, 2.75 3D)
+  // Walls and debris: modified dynamic boundary conditions (English et al. 2022), or DBC (Crespo et al. 2007).
+  SphBoundary boundary = SphBoundary::kMdbc;
 };
 
 // What a gauge reads (solver/connected_depth.h): the water's volume per unit area over the ground (the

@@ -76,6 +76,11 @@ const ObjectDoc& sph_doc() {
               "particles move by -A h |u| dt grad C, not at the free surface")
            .def("lind"),
        number("shifting_coef", "A of the shifting displacement -A h |u| dt grad C").above(0).at_most(10).def(2.0),
+       choice("boundary", {"mdbc", "dbc"},
+              "walls and debris boxes: mdbc, modified dynamic boundary conditions (English et al. 2022: each "
+              "boundary particle's density from the water at its mirror image across the surface), or dbc, "
+              "dynamic boundary conditions (Crespo et al. 2007: density by continuity)")
+           .def("mdbc"),
        number("shifting_threshold",
               "free-surface threshold on the divergence of position: no shifting below it, the fraction "
               "(div r - threshold) / (D - threshold) of it up to D")

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "common/errors.h"
+#include "solver/sph/ghost_nodes.h"
 
 namespace flume::sph {
 
@@ -32,13 +33,20 @@ DebrisParticles make_debris_particles(const Scene& scene, double spacing, int la
       step[a] = b.size[a] / n[a];
     }
     const double mass = scene.fluid.density * step[0] * step[1] * step[2];
+    const double half[3] = {0.5 * b.size[0], 0.5 * b.size[1], 0.5 * b.size[2]};
     auto within_layers = [&](int a, int i) { return i < layers || i >= n[a] - layers; };
     for (int i = 0; i < n[0]; ++i)
       for (int j = 0; j < n[1]; ++j)
         for (int l = 0; l < n[2]; ++l) {
           if (!within_layers(0, i) && !within_layers(1, j) && !within_layers(2, l)) continue;
           const int idx[3] = {i, j, l};
-          for (int a = 0; a < 3; ++a) p.offset[a].push_back(-0.5 * b.size[a] + (idx[a] + 0.5) * step[a]);
+          double o[3], g[3];
+          for (int a = 0; a < 3; ++a) o[a] = -0.5 * b.size[a] + (idx[a] + 0.5) * step[a];
+          box_ghost_vector(half, o, 3, g);
+          for (int a = 0; a < 3; ++a) {
+            p.offset[a].push_back(o[a]);
+            p.ghost[a].push_back(g[a]);
+          }
           p.body.push_back(static_cast<int>(k));
           p.mass.push_back(mass);
         }

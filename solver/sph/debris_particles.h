@@ -1,6 +1,6 @@
 // The boundary particles of the debris boxes in an SPH run (issue 24). Each box carries a lattice of particles
-// that the water meets as it meets the walls' (dynamic boundary particles: density evolved by continuity from
-// the water round them and floored at rho0, pressure by the equation of state) but that move with the box. The
+// that the water meets as it meets the walls' (their density from the water at their ghost nodes, mDBC, or
+// evolved by continuity, DBC; pressure by the equation of state) but that move with the box. The
 // water's pair forces on a box's particles, summed, are its load (force, and torque about the centre); Bullet
 // (RigidWorld) adds gravity and contact and moves the box, and its particles take the box's motion. This is how
 // DualSPHysics couples floating bodies (Crespo et al. 2015, section 2.5; Canelas et al. 2016).
@@ -19,6 +19,7 @@ struct DebrisParticles {
   std::vector<double> offset[3];  // body frame, from the box's centre, m
   std::vector<int> body;          // index into scene.debris.bodies
   std::vector<double> mass;       // rho0 times the lattice cell's volume, kg
+  std::vector<double> ghost[3];   // body frame, to the ghost node across the nearest face (mDBC), m
   std::size_t size() const { return body.size(); }
 };
 

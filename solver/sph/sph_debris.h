@@ -26,22 +26,28 @@ struct SphDebris {
 
   std::size_t n = 0;
   std::vector<T> x[D], xh[D], v[D];    // at t, at the mid-step; velocity (the box's at t)
+  std::vector<T> g[D];                 // to the ghost node (mDBC), in the world frame at t
   std::vector<T> rho, rhoh, drho;      // density at t and at the mid-step, its rate
   std::vector<T> p, ir, f[D];          // pressure and 1/rho of the state last evaluated; the water's force
   std::vector<T> mass;
   std::vector<int> body;
   std::vector<double> offset[3];       // body frame
+  std::vector<double> ghost[3];        // body frame
   CellList list;
 
   void seed(const DebrisParticles& s, T rho0) {
     n = s.size();
-    for (int a = 0; a < 3; ++a) offset[a] = s.offset[a];
+    for (int a = 0; a < 3; ++a) {
+      offset[a] = s.offset[a];
+      ghost[a] = s.ghost[a];
+    }
     body = s.body;
     mass.assign(s.mass.begin(), s.mass.end());
     for (int d = 0; d < D; ++d) {
       x[d].assign(n, T(0));
       xh[d].assign(n, T(0));
       v[d].assign(n, T(0));
+      g[d].assign(n, T(0));
       f[d].assign(n, T(0));
     }
     rho.assign(n, rho0);
@@ -60,9 +66,11 @@ struct SphDebris {
         const BodyState& b = s[body[k]];
         const Eigen::Vector3d r = b.rotation * Eigen::Vector3d(offset[0][k], offset[1][k], offset[2][k]);
         const Eigen::Vector3d u = b.velocity + b.angular_velocity.cross(r);
+        const Eigen::Vector3d gk = b.rotation * Eigen::Vector3d(ghost[0][k], ghost[1][k], ghost[2][k]);
         for (int d = 0; d < 3; ++d) {
           x[d][k] = T(b.position[d] + r[d]);
           v[d][k] = T(u[d]);
+          g[d][k] = T(gk[d]);
         }
       });
     }
@@ -92,8 +100,12 @@ struct SphDebris {
     for (int d = 0; d < D; ++d) {
       permute(x[d]);
       permute(v[d]);
+      permute(g[d]);
     }
-    for (int a = 0; a < 3; ++a) permute(offset[a]);
+    for (int a = 0; a < 3; ++a) {
+      permute(offset[a]);
+      permute(ghost[a]);
+    }
     permute(rho);
     permute(mass);
     permute(body);

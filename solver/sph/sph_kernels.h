@@ -27,6 +27,7 @@ struct Params {
   T support2 = 0;   // (2h)^2
   T eta2 = 0;       // 0.01 h^2, keeps 1/r^2 finite
   T grad_coef = 0;  // -5 alpha_D / h^2: F(q) = grad_coef (1 - q/2)^3
+  T w_alpha = 0;    // alpha_D of the kernel's value (wendland_w)
   T rho0 = 0, B = 0, gamma = 0, c0 = 0;
   T nu = 0;     // laminar kinematic viscosity (m^2/s)
   T alpha = 0;  // artificial viscosity coefficient; 0: laminar + SPS instead
@@ -195,6 +196,91 @@ FLUME_HD void shift_displacement(const Params<T>& P, const T* gradc, T divr, T s
     const T s = P.shift_max / std::sqrt(len2);
     for (int d = 0; d < D; ++d) dr[d] *= s;
   }
+}
+
+// mDBC (ghost_nodes.h): the water's density at a wall particle's ghost node g by a first-order corrected SPH
+// interpolation (Liu & Liu 2006, as English et al. 2022 use it). With r = g - x_b and rho_b = rho_g - grad rho
+// . r to first order, the sums of m_b W and m_b grad W over the water are the moment matrix
+//   A = [[sum V W, sum V W r^T], [sum V grad W, sum V grad W r^T]]   (V = m_b / rho_b)
+// times u = (rho_g, -grad rho).
+template <int D, typename T>
+struct GhostSums {
+  static constexpr int kN = D + 1;
+  T rhs[kN] = {};     // sum m_b W, sum m_b grad W
+  T A[kN * kN] = {};  // row-major
+};
+template <int D, typename T>
+FLUME_HD void pair_ghost(const Params<T>& P, const T* r, T r2, T F, T m_b, T V_b, GhostSums<D, T>& S) {
+  constexpr int N = D + 1;
+  const T W = wendland_w(std::sqrt(r2) * P.inv_h, P.w_alpha);
+  T row[N];  // (W, grad W) of this pair
+  row[0] = W;
+  for (int d = 0; d < D; ++d) row[1 + d] = F * r[d];
+  for (int i = 0; i < N; ++i) {
+    S.rhs[i] += m_b * row[i];
+    const T vr = V_b * row[i];
+    S.A[i * N] += vr;
+    for (int j = 0; j < D; ++j) S.A[i * N + 1 + j] += vr * r[j];
+  }
+}
+// Sums gathered at the ghost's mirror image across a symmetry plane (sph/mirror.h), in the reflected frame,
+// added to those at the ghost: the entries with exactly one index on the axis change sign.
+template <int D, typename T>
+FLUME_HD void add_reflected_ghost(int axis, const GhostSums<D, T>& m, GhostSums<D, T>& S) {
+  constexpr int N = D + 1;
+  auto flips = [&](int i) { return i == 1 + axis; };
+  for (int i = 0; i < N; ++i) {
+    S.rhs[i] += flips(i) ? -m.rhs[i] : m.rhs[i];
+    for (int j = 0; j < N; ++j) S.A[i * N + j] += flips(i) != flips(j) ? -m.A[i * N + j] : m.A[i * N + j];
+  }
+}
+// The wall particle's density, rho_g + grad rho . (x_k - g) for ghost vector gv = g - x_k, floored at rho0 as
+// for DBC (a wall does not pull on the water: near its free surface the water's pressure extrapolates below
+// zero). Returns 0 where the water round the ghost does not support the interpolation: a moment matrix near
+// singular (|det| < 1e-3, DualSPHysics' limit) or a kernel sum sum V W under one half, the value at a flat free
+// surface (the ghost outside the water: a splash or a thin sheet). There the caller keeps DBC's density by
+// continuity, which grows as water closes in on the wall; the Shepard average of a few particles would not,
+// and lets them through.
+template <int D, typename T>
+FLUME_HD T ghost_density(const GhostSums<D, T>& S, const T* gv, T rho0) {
+  constexpr int N = D + 1;
+  T a[N * N], b[N], det = 1;
+  for (int i = 0; i < N * N; ++i) a[i] = S.A[i];
+  for (int i = 0; i < N; ++i) b[i] = S.rhs[i];
+  // Gaussian elimination with partial pivoting; det is the pivots' product.
+  for (int c = 0; c < N; ++c) {
+    int piv = c;
+    for (int i = c + 1; i < N; ++i)
+      if (std::fabs(a[i * N + c]) > std::fabs(a[piv * N + c])) piv = i;
+    if (piv != c) {
+      for (int j = 0; j < N; ++j) {
+        const T t = a[c * N + j];
+        a[c * N + j] = a[piv * N + j];
+        a[piv * N + j] = t;
+      }
+      const T t = b[c];
+      b[c] = b[piv];
+      b[piv] = t;
+      det = -det;
+    }
+    det *= a[c * N + c];
+    if (a[c * N + c] == T(0)) break;
+    for (int i = c + 1; i < N; ++i) {
+      const T f = a[i * N + c] / a[c * N + c];
+      for (int j = c; j < N; ++j) a[i * N + j] -= f * a[c * N + j];
+      b[i] -= f * b[c];
+    }
+  }
+  if (!(std::fabs(det) >= T(1e-3) && S.A[0] >= T(0.5))) return T(0);
+  T u[N];
+  for (int i = N - 1; i >= 0; --i) {
+    T s = b[i];
+    for (int j = i + 1; j < N; ++j) s -= a[i * N + j] * u[j];
+    u[i] = s / a[i * N + i];
+  }
+  T rho = u[0];
+  for (int d = 0; d < D; ++d) rho += u[1 + d] * gv[d];  // -grad rho . (x_k - g) = u[1:] . gv
+  return rho > rho0 ? rho : rho0;
 }
 
 // Symplectic position-Verlet stages (DualSPHysics' Symplectic, Monaghan 2005). Predictor to t + dt/2:

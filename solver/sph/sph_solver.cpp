@@ -4,8 +4,8 @@
 // instruments.
 //
 // Fluid particles are stored as structure-of-arrays and re-sorted by cell at the start of every step; the
-// wall particles (dynamic boundary particles: fixed, their density evolved by continuity and floored at rho0)
-// are sorted once. Each loop body reads its neighbours and writes only its own particle: race-free without
+// wall particles (fixed; their density from the water at their ghost nodes, mDBC, or evolved by continuity,
+// DBC; floored at rho0) are sorted once. Each loop body reads its neighbours and writes only its own particle: race-free without
 // atomics, and the result does not depend on the number of threads.
 #include <omp.h>
 
@@ -24,6 +24,7 @@
 #include "solver/sph/boundary_particles.h"
 #include "solver/sph/cell_list.h"
 #include "solver/sph/debris_particles.h"
+#include "solver/sph/ghost_nodes.h"
 #include "solver/sph/mirror.h"
 #include "solver/sph/sph_debris.h"
 #include "solver/sph/sph_kernels.h"
@@ -227,6 +228,7 @@ class SphSolver final : public Simulation {
     ar(rhow_);
     ar.expect("debris particles", bodies_.n);
     for (auto& o : bodies_.offset) ar(o);
+    for (auto& o : bodies_.ghost) ar(o);
     ar(bodies_.body);
     ar(bodies_.mass);
     ar(bodies_.rho);
@@ -239,6 +241,7 @@ class SphSolver final : public Simulation {
     bool mismatch = rhow_.size() != nw_ || bodies_.body.size() != bodies_.n || bodies_.mass.size() != bodies_.n ||
                     bodies_.rho.size() != bodies_.n;
     for (const auto& o : bodies_.offset) mismatch = mismatch || o.size() != bodies_.n;
+    for (const auto& o : bodies_.ghost) mismatch = mismatch || o.size() != bodies_.n;
     for_each_particle_array([&](std::vector<T>& a, bool optional) {
       mismatch = mismatch || ((!optional || !a.empty()) && a.size() != n);
     });
@@ -297,6 +300,7 @@ class SphSolver final : public Simulation {
     Pd_.support2 = 4 * h_ * h_;
     Pd_.eta2 = 0.01 * h_ * h_;
     Pd_.grad_coef = -5 * sph::wendland_alpha<D>(h_) / (h_ * h_);
+    Pd_.w_alpha = sph::wendland_alpha<D>(h_);
     Pd_.rho0 = f.density;
     Pd_.gamma = f.gamma;
     Pd_.c0 = c0;
@@ -313,6 +317,7 @@ class SphSolver final : public Simulation {
     Pd_.sps_cs2 = (0.12 * delta) * (0.12 * delta);
     Pd_.sps_ci = 2.0 / 3.0 * 0.0066 * delta * delta;
     shifting_ = s.shifting == SphShifting::kLind;
+    mdbc_ = s.boundary == SphBoundary::kMdbc;
     Pd_.shift_ah = shifting_ ? s.shifting_coef * h_ : 0.0;
     Pd_.shift_tfs = s.shifting_threshold;
     Pd_.shift_dim = D;
@@ -322,6 +327,7 @@ class SphSolver final : public Simulation {
     P_.support2 = T(Pd_.support2);
     P_.eta2 = T(Pd_.eta2);
     P_.grad_coef = T(Pd_.grad_coef);
+    P_.w_alpha = T(Pd_.w_alpha);
     P_.rho0 = T(Pd_.rho0);
     P_.B = T(Pd_.B);
     P_.gamma = T(Pd_.gamma);
@@ -427,6 +433,13 @@ class SphSolver final : public Simulation {
         vw_[d][s] = T(w.velocity[3 * k + d]);
       }
       wall_id_[s] = w.wall[k];
+    }
+    if (mdbc_) {
+      // A wall particle lies within `layers` lattice steps of open space on every axis.
+      const std::vector<double> ghost = sph::wall_ghost_vectors(scene_, w, (layers + 1) * spacing_ * std::sqrt(D));
+      for (int d = 0; d < D; ++d) gw_[d].resize(nw_);
+      for (size_t s = 0; s < nw_; ++s)
+        for (int d = 0; d < D; ++d) gw_[d][s] = T(ghost[3 * wall_list_.order[s] + d]);
     }
     std::vector<uint32_t> cells(nw_);
     for (size_t s = 0; s < nw_; ++s) cells[s] = wall_list_.cell[wall_list_.order[s]];
@@ -564,14 +577,25 @@ class SphSolver final : public Simulation {
   // The rates at one state: accelerations and density rates of the fluid, density rates and forces of the
   // walls and of the debris particles (at XB, densities RB); with `shift_sums`, the shifting's grad C and div r
   // of the fluid too.
-  void evaluate(const std::vector<T>* X, const std::vector<T>* V, const std::vector<T>& R,
-                const std::vector<T>& RW, const std::vector<T>* XB, const std::vector<T>& RB, double t,
-                bool shift_sums) {
+  void evaluate(const std::vector<T>* X, const std::vector<T>* V, const std::vector<T>& R, std::vector<T>& RW,
+                const std::vector<T>* XB, std::vector<T>& RB, double t, bool shift_sums) {
     const sph::Params<T> P = P_;
     sph::parallel_for(n_, [&](size_t i) {
       pf_[i] = sph::tait_pressure(R[i], P);
       irf_[i] = T(1) / R[i];
     });
+    if (mdbc_) {
+      // The walls' and the boxes' densities from the water at their ghost nodes, this state's; where too
+      // little water lies round a ghost, the density by continuity that the step carried (DBC's).
+      sph::parallel_for(nw_, [&](size_t k) {
+        const T r = ghost_density(X, R, xw_, gw_, k);
+        if (r > T(0)) RW[k] = r;
+      });
+      sph::parallel_for(bodies_.n, [&](size_t k) {
+        const T r = ghost_density(X, R, XB, bodies_.g, k);
+        if (r > T(0)) RB[k] = r;
+      });
+    }
     sph::parallel_for(nw_, [&](size_t k) {
       pw_[k] = sph::tait_pressure(RW[k], P);
       irw_[k] = T(1) / RW[k];
@@ -677,6 +701,41 @@ class SphSolver final : public Simulation {
 #pragma omp parallel for reduction(+ : pairs) schedule(static)
     for (long i = 0; i < long(n_); ++i) pairs += pairs_[i];
     interactions_ += pairs;
+  }
+
+  // mDBC: the density of boundary particle k (positions XK, ghost vectors GK) from the water (X, R) round its
+  // ghost node, and round the node's image across a symmetry plane; 0 where that water is too little
+  // (sph::ghost_density).
+  T ghost_density(const std::vector<T>* X, const std::vector<T>& R, const std::vector<T>* XK,
+                  const std::vector<T>* GK, size_t k) const {
+    T g[D], gv[D];
+    for (int d = 0; d < D; ++d) {
+      gv[d] = GK[d][k];
+      g[d] = XK[d][k] + gv[d];
+    }
+    auto gather = [&](const T* at, sph::GhostSums<D, T>& S) {
+      sph::for_each_neighbour_range<D>(grid_, fluid_list_, at, search_, [&](uint32_t b0, uint32_t b1) {
+        for (uint32_t b = b0; b < b1; ++b) {
+          T r[D], r2 = 0;
+          for (int d = 0; d < D; ++d) {
+            r[d] = at[d] - X[d][b];
+            r2 += r[d] * r[d];
+          }
+          if (r2 >= P_.support2) continue;
+          sph::pair_ghost<D, T>(P_, r, r2, sph::wendland_gradient_factor(r2, P_), mass_[b], mass_[b] / R[b], S);
+        }
+      });
+    };
+    sph::GhostSums<D, T> S;
+    gather(g, S);
+    if (near_mirror(g)) {
+      T gm[D];
+      sph::reflect_point<D>(mirror_.axis, T(mirror_.at), g, gm);
+      sph::GhostSums<D, T> M;
+      gather(gm, M);
+      sph::add_reflected_ghost(mirror_.axis, M, S);
+    }
+    return sph::ghost_density<D, T>(S, gv, P_.rho0);
   }
 
   // Particle shifting after the corrector, from the mid-step sums and speed (DualSPHysics adds it to the
@@ -809,6 +868,7 @@ class SphSolver final : public Simulation {
   sph::Params<T> Pm_;   // P_ in the reflected frame (gravity reflected)
   bool artificial_ = false;
   bool shifting_ = false;
+  bool mdbc_ = false;  // walls and boxes by mDBC (ghost nodes) rather than DBC (continuity)
   double spacing_ = 0, h_ = 0, search_ = 0, g_norm_ = 0;
   sph::CellGrid<D> grid_;
   sph::CellList fluid_list_, wall_list_;
@@ -828,6 +888,7 @@ class SphSolver final : public Simulation {
   // force.
   size_t nw_ = 0;
   std::vector<T> xw_[D], vw_[D], rhow_, rhowh_, drhow_, pw_, irw_, fw_[D];
+  std::vector<T> gw_[D];  // mDBC: from each wall particle to its ghost node
   std::vector<int> wall_id_;
   T mw_ = 0;
 
