@@ -51,16 +51,20 @@ inline double hydrostatic_strain_at(double head_m, const FluidSettings& fluid, d
 }
 
 // The solver's particle arrays, as the inflow adds, moves and removes particles in them. `held` may be empty;
-// `tag` is 1 for buffer particles and 0 for free water; `vol` is the reference volume (mass / rho).
+// `tag` is 1 for buffer particles and 0 for free water; `vol` is the reference volume (mass / rho); `e` the
+// strain J - 1 the boundary sets on the particles it places (SPH keeps a density instead and converts). `C`
+// (MPM's affine velocity, zeroed where a particle is placed) may be null (SPH). `carried`: the solver's other
+// per-particle arrays, which the boundary only keeps in step: removed with their particles, 0 for new ones.
 template <int D, typename T>
 struct ParticleArrays {
   std::vector<T>* x[D];
   std::vector<T>* v[D];
-  std::vector<T>* C[D * D];
+  std::vector<T>* C[D * D] = {};
   std::vector<T>* e;
   std::vector<T>* vol;
   std::vector<T>* held;
   std::vector<T>* tag;
+  std::vector<std::vector<T>*> carried;
   size_t size() const { return x[0]->size(); }
 };
 
@@ -182,7 +186,9 @@ class InflowBoundary {
           a_.x[d]->push_back(T(0));
           a_.v[d]->push_back(T(0));
         }
-        for (int q = 0; q < D * D; ++q) a_.C[q]->push_back(T(0));
+        for (int q = 0; q < D * D; ++q)
+          if (a_.C[q]) a_.C[q]->push_back(T(0));
+        for (auto* c : a_.carried) c->push_back(T(0));
         a_.e->push_back(T(0));
         a_.vol->push_back(T(v0_));
         if (!a_.held->empty()) a_.held->push_back(T(0));
@@ -270,7 +276,8 @@ class InflowBoundary {
     (*a_.x[D - 1])[i] = T(z);
     if constexpr (D == 3) (*a_.x[1])[i] = T(y_of(k));
     for (int d = 0; d < D; ++d) (*a_.v[d])[i] = T(d == 0 ? u : 0.0);
-    for (int q = 0; q < D * D; ++q) (*a_.C[q])[i] = T(0);
+    for (int q = 0; q < D * D; ++q)
+      if (a_.C[q]) (*a_.C[q])[i] = T(0);
     (*a_.e)[i] = T(hydrostatic_strain_at(h - (z - floor_), fluid_, g_up_));
     if (x >= x_in_) {  // it crossed: free water from now on
       (*a_.tag)[i] = T(0);
@@ -297,7 +304,9 @@ class InflowBoundary {
       arrays.push_back(a_.x[d]);
       arrays.push_back(a_.v[d]);
     }
-    for (int q = 0; q < D * D; ++q) arrays.push_back(a_.C[q]);
+    for (int q = 0; q < D * D; ++q)
+      if (a_.C[q]) arrays.push_back(a_.C[q]);
+    for (auto* c : a_.carried) arrays.push_back(c);
     arrays.push_back(a_.e);
     arrays.push_back(a_.vol);
     if (!a_.held->empty()) arrays.push_back(a_.held);

@@ -15,6 +15,7 @@
 #include <sstream>
 
 #include "common/errors.h"
+#include "solver/inflow.h"
 #include "solver/interleave_axes.h"
 #include "solver/checkpoint.h"
 #include "solver/debris_coupling.h"
@@ -49,7 +50,6 @@ class SphSolver final : public Simulation {
  public:
   SphSolver(const Scene& scene, const SimulationOptions& options) : scene_(scene), instruments_(scene_) {
     if (options.threads > 0) omp_set_num_threads(options.threads);
-    refuse_unsupported();
     const int per_axis = static_cast<int>(std::lround(std::pow(scene.solver.ppc, 1.0 / D)));
     spacing_ = scene.solver.dx / per_axis;
     setup_params();
@@ -57,6 +57,10 @@ class SphSolver final : public Simulation {
     seed_fluid();
     seed_walls();
     seed_debris();
+    if (scene.inflow.present) {  // the buffer of the inflow boundary (solver/inflow.h), as MPM's
+      inflow_ = std::make_unique<InflowBoundary<D, T>>(scene_, spacing_, particle_arrays());
+      seed_inflow();
+    }
     const Energy e = energy();
     energy0_ = e.total();
     // Slack of the energy audit, as MPM's: SPH with viscosity and density diffusion dissipates, so the total
@@ -68,6 +72,7 @@ class SphSolver final : public Simulation {
       zmax = std::max(zmax, w.hi[D - 1]);
     }
     energy_slack_ = 0.01 * std::max({e.kinetic, mass_total_ * g_norm_ * (zmax - zmin), 1e-12});
+    if (inflow_) energy_slack_ += inflow_->energy_scale();
     last_energy_ = e;
     instruments_.sample(*this, 0.0, 0.0, true);
   }
@@ -114,6 +119,7 @@ class SphSolver final : public Simulation {
       rhow_[k] = std::max(T(P_.rho0), sph::correct_density(rhow_[k], rhowh_[k], drhow_[k], T(dt)));
     });
     if (debris_) step_debris(dt);
+    if (inflow_) apply_inflow(time_, time_ + dt);
     add_wall_impulses(dt);
     time_ += dt;
     dt_ = dt;
@@ -213,6 +219,7 @@ class SphSolver final : public Simulation {
     f(mass_, false);
     f(vol_, false);
     f(held_, true);
+    f(tag_, true);
     for (auto& t : tau_) f(t, false);
   }
 
@@ -233,6 +240,8 @@ class SphSolver final : public Simulation {
     ar(bodies_.mass);
     ar(bodies_.rho);
     if (debris_) debris_->checkpoint(ar);
+    ar.expect("inflow", inflow_ ? 1 : 0);
+    if (inflow_) inflow_->checkpoint(ar);
     ar.fields(time_, dt_, max_speed_, steps_, interactions_, energy0_, energy_slack_, last_energy_, mass_total_,
               status_, message_);
     instruments_.checkpoint(ar);
@@ -245,7 +254,9 @@ class SphSolver final : public Simulation {
     for_each_particle_array([&](std::vector<T>& a, bool optional) {
       mismatch = mismatch || ((!optional || !a.empty()) && a.size() != n);
     });
-    if (mismatch || n != n_) ar.fail("particles", "particle arrays of another length than the scene seeds");
+    // With an inflow the count is the checkpoint's (the boundary adds and removes particles).
+    if (mismatch || (n != n_ && !inflow_)) ar.fail("particles", "particle arrays of another length than the scene seeds");
+    if (n != n_) resize_scratch(n);
     if (status_ == RunStatus::kUnstable) ar.fail("status", "the checkpointed run had gone unstable");
     if (debris_) bodies_.place(*debris_);
     // A finished run resumed to a later end time runs on.
@@ -283,12 +294,6 @@ class SphSolver final : public Simulation {
   const Energy& last_energy() const { return last_energy_; }
 
  private:
-  void refuse_unsupported() const {
-    const std::string why = " (solver.method sph; docs/sph.md lists what SPH does not do yet)";
-    if (scene_.inflow.present)
-      throw InputError(scene_.file, "inflow", "SPH has no inflow boundary yet" + why);
-  }
-
   void setup_params() {
     const auto& f = scene_.fluid;
     const auto& s = scene_.sph;
@@ -368,9 +373,6 @@ class SphSolver final : public Simulation {
     for (int d = 0; d < D; ++d) {
       x_[d].assign(seeds.x[d].begin(), seeds.x[d].end());
       v_[d].assign(n_, T(0));
-      xh_[d].resize(n_);
-      vh_[d].resize(n_);
-      a_[d].resize(n_);
     }
     rho_.resize(n_);
     mass_.resize(n_);
@@ -382,20 +384,72 @@ class SphSolver final : public Simulation {
     }
     mass_total_ = water_mass(vol_, rho0);
     if (seeds.any_held) held_.assign(seeds.held.begin(), seeds.held.end());
-    rhoh_.resize(n_);
-    drho_.resize(n_);
-    pf_.resize(n_);
-    irf_.resize(n_);
-    visc_dt_.resize(n_);
-    pairs_.resize(n_);
-    for (int k = 0; k < kS; ++k) {
-      tau_[k].assign(n_, T(0));
-      tau_next_[k].assign(n_, T(0));
+    for (int k = 0; k < kS; ++k) tau_[k].assign(n_, T(0));
+    resize_scratch(n_);
+  }
+
+  // The arrays a step fills before it reads them (the predictor's state, the rates, the shifting's sums), for
+  // n particles.
+  void resize_scratch(size_t n) {
+    n_ = n;
+    for (int d = 0; d < D; ++d) {
+      xh_[d].resize(n);
+      vh_[d].resize(n);
+      a_[d].resize(n);
     }
+    rhoh_.resize(n);
+    drho_.resize(n);
+    pf_.resize(n);
+    irf_.resize(n);
+    visc_dt_.resize(n);
+    pairs_.resize(n);
+    for (int k = 0; k < kS; ++k) tau_next_[k].resize(n);
     if (shifting_) {
-      for (int d = 0; d < D; ++d) gradc_[d].assign(n_, T(0));
-      divr_.assign(n_, T(0));
+      for (int d = 0; d < D; ++d) gradc_[d].resize(n);
+      divr_.resize(n);
     }
+  }
+
+  // --- the inflow boundary (solver/inflow.h): it moves, adds and removes particles in these arrays ---
+  // SPH's density and sub-particle stress are carried along; the boundary sets a strain on the particles it
+  // places, converted to their density (rho0 / (1 + e)) after each application.
+  ParticleArrays<D, T> particle_arrays() {
+    ParticleArrays<D, T> a;
+    for (int d = 0; d < D; ++d) {
+      a.x[d] = &x_[d];
+      a.v[d] = &v_[d];
+    }
+    a.e = &strain_;
+    a.vol = &vol_;
+    a.held = &held_;
+    a.tag = &tag_;
+    a.carried = {&rho_, &mass_};
+    for (auto& t : tau_) a.carried.push_back(&t);
+    return a;
+  }
+  void seed_inflow() {
+    strain_.assign(n_, T(0));
+    inflow_->seed();
+    after_inflow();
+    mass_total_ = water_mass(vol_, scene_.fluid.density);
+  }
+  void apply_inflow(double t0, double t1) {
+    strain_.resize(n_);  // scratch: filled here for every particle
+    sph::parallel_for(n_, [&](size_t i) { strain_[i] = T(scene_.fluid.density) / rho_[i] - T(1); });
+    const auto change = inflow_->apply(t0, t1);
+    energy0_ += change.energy;
+    after_inflow();
+    if (change.structural) mass_total_ = water_mass(vol_, scene_.fluid.density);
+  }
+  // The buffer's particles take the density of the strain the boundary set (the recorded depth's hydrostatic
+  // one); a new particle (its carried density and mass 0) takes it too, and the mass of its volume.
+  void after_inflow() {
+    const T rho0 = T(scene_.fluid.density);
+    resize_scratch(x_[0].size());
+    sph::parallel_for(n_, [&](size_t i) {
+      if (tag_[i] > T(0) || rho_[i] == T(0)) rho_[i] = rho0 / (T(1) + strain_[i]);
+      if (mass_[i] == T(0)) mass_[i] = T(scene_.fluid.density * double(vol_[i]));
+    });
   }
 
   void seed_walls() {
@@ -876,6 +930,7 @@ class SphSolver final : public Simulation {
   // Fluid: state at t, the predictor's state at t + dt/2, the rates of the last evaluation.
   size_t n_ = 0;
   std::vector<T> x_[D], v_[D], rho_, mass_, vol_, held_;
+  std::vector<T> tag_, strain_;  // inflow only: buffer (1) or free water (0); the strain the boundary sets
   std::vector<T> xh_[D], vh_[D], rhoh_;
   std::vector<T> a_[D], drho_, pf_, irf_, visc_dt_;  // pressure and 1/rho of the state last evaluated
   std::vector<int> pairs_;
@@ -894,6 +949,7 @@ class SphSolver final : public Simulation {
 
   // Debris: the boxes (Bullet) and their boundary particles; empty without debris.
   std::unique_ptr<DebrisCoupling> debris_;
+  std::unique_ptr<InflowBoundary<D, T>> inflow_;
   sph::SphDebris<D, T> bodies_;
   std::vector<double> load_impulse_;
 

@@ -178,6 +178,29 @@ TEST(Apron, InflowInjectsTheRecordedFlux) {
   fs::remove_all(dir);
 }
 
+// The same with SPH (solver.method sph), which takes the same boundary (its buffer particles are fluid
+// particles whose motion and density the boundary sets each step). The sheared profile, over 1 s, with K =
+// 2e5 Pa (c0 = 14 m/s, 28 times the flow; SPH's step is set by c0).
+TEST(Apron, SphInflowInjectsTheRecordedFlux) {
+  const fs::path dir = temp_dir("mass_sph");
+  double q = 0, h_max = 0;
+  const std::string rec = write_record(dir, true, 0.5, 1.0, &q, &h_max);
+  const Scene scene =
+      parse_scene_text(channel_scene(rec), "channel",
+                       {parse_override("solver.method=sph"), parse_override("solver.end_time=1.0"),
+                        parse_override("fluid.bulk_modulus=2e5")});
+  auto sim = make_simulation(scene, {Backend::kCpu, 1});
+  const double s = scene.solver.dx / 2, mp = kRho * s * s;
+  const double m0 = mass_downstream(*sim, 0.5, mp);
+  ASSERT_EQ(test::run_until(*sim, 1.0), RunStatus::kOk) << sim->message();
+  const double entered = mass_downstream(*sim, 0.5, mp) - m0, expected = kRho * q;
+  const double tol = 2 * kRho * s * (h_max + s);
+  std::printf("SPH: entered %.3f kg/m, recorded flux %.3f kg/m, difference %.3f (tol %.3f, %.1f%%)\n", entered,
+              expected, entered - expected, tol, 100 * tol / expected);
+  EXPECT_NEAR(entered, expected, tol);
+  fs::remove_all(dir);
+}
+
 TEST(Apron, BadRecordsAreInputErrors) {
   const fs::path dir = temp_dir("bad");
   auto field_of = [](const std::string& text) -> std::string {
