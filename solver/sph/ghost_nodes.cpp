@@ -57,16 +57,19 @@ std::vector<Plane> planes_near(const Scene& s, const Vec3d& p, double reach) {
 // or plane of the expected dimension: parallel planes).
 bool project(const std::vector<Plane>& planes, const std::vector<int>& pick, const Eigen::Vector3d& p, int D,
              Eigen::Vector3d& q) {
+  // At most three planes in three dimensions: fixed-capacity matrices, no allocation per candidate.
+  using Mat = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 3, 3>;
+  using Vec = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 3, 1>;
   const int k = static_cast<int>(pick.size());
-  Eigen::MatrixXd N(k, D);
-  Eigen::VectorXd r(k);
+  Mat N(k, D);
+  Vec r(k);
   for (int i = 0; i < k; ++i) {
     const Plane& pl = planes[pick[i]];
     for (int d = 0; d < D; ++d) N(i, d) = pl.n[d];
     r[i] = pl.n.head(D).dot(p.head(D)) - pl.c;
   }
-  const Eigen::MatrixXd G = N * N.transpose();
-  Eigen::FullPivLU<Eigen::MatrixXd> lu(G);
+  const Mat G = N * N.transpose();
+  Eigen::FullPivLU<Mat> lu(G);
   if (lu.rank() < k) return false;
   q = p;
   q.head(D) -= N.transpose() * lu.solve(r);

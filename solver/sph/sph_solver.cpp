@@ -642,11 +642,11 @@ class SphSolver final : public Simulation {
       // The walls' and the boxes' densities from the water at their ghost nodes, this state's; where too
       // little water lies round a ghost, the density by continuity that the step carried (DBC's).
       sph::parallel_for(nw_, [&](size_t k) {
-        const T r = ghost_density(X, R, xw_, gw_, k);
+        const T r = ghost_density(X, xw_, gw_, k);
         if (r > T(0)) RW[k] = r;
       });
       sph::parallel_for(bodies_.n, [&](size_t k) {
-        const T r = ghost_density(X, R, XB, bodies_.g, k);
+        const T r = ghost_density(X, XB, bodies_.g, k);
         if (r > T(0)) RB[k] = r;
       });
     }
@@ -757,11 +757,11 @@ class SphSolver final : public Simulation {
     interactions_ += pairs;
   }
 
-  // mDBC: the density of boundary particle k (positions XK, ghost vectors GK) from the water (X, R) round its
+  // mDBC: the density of boundary particle k (positions XK, ghost vectors GK) from the water (at X, with the
+  // masses and the 1/rho this evaluation computed) round its
   // ghost node, and round the node's image across a symmetry plane; 0 where that water is too little
   // (sph::ghost_density).
-  T ghost_density(const std::vector<T>* X, const std::vector<T>& R, const std::vector<T>* XK,
-                  const std::vector<T>* GK, size_t k) const {
+  T ghost_density(const std::vector<T>* X, const std::vector<T>* XK, const std::vector<T>* GK, size_t k) const {
     T g[D], gv[D];
     for (int d = 0; d < D; ++d) {
       gv[d] = GK[d][k];
@@ -776,7 +776,7 @@ class SphSolver final : public Simulation {
             r2 += r[d] * r[d];
           }
           if (r2 >= P_.support2) continue;
-          sph::pair_ghost<D, T>(P_, r, r2, sph::wendland_gradient_factor(r2, P_), mass_[b], mass_[b] / R[b], S);
+          sph::pair_ghost<D, T>(P_, r, r2, sph::wendland_gradient_factor(r2, P_), mass_[b], mass_[b] * irf_[b], S);
         }
       });
     };
