@@ -491,7 +491,8 @@ Scene parse(const json& root_json, const std::string& file) {
     p.artificial_alpha = r.number("artificial_alpha");
     p.shifting = r.choice<SphShifting>("shifting", {{"none", SphShifting::kNone}, {"lind", SphShifting::kLind}});
     p.shifting_coef = r.number("shifting_coef");
-    p.boundary = r.choice<SphBoundary>("boundary", {{"mdbc", SphBoundary::kMdbc}, {"dbc", SphBoundary::kDbc}});
+    p.boundary =
+        r.choice<SphBoundary>("boundary", {{"mdbc", SphBoundary::kMdbc}, {"dbc", SphBoundary::kDbc}});
     // div r is D inside the water: the threshold must lie below it.
     p.shifting_threshold =
         r.number_or("shifting_threshold", dim == 2 ? 1.5 : 2.75, Bounds{0.0, double(dim), true, true});

@@ -82,7 +82,8 @@ struct SphSettings {
   SphShifting shifting = SphShifting::kLind;  // particle shifting (Lind et al. 2012), as the study runs it
   double shifting_coef = 2.0;                 // A of dr = -A h |u| dt grad C (the study: 2)
   double shifting_threshold = 1.5;            // free surface below this div r (DualSPHysics: 1.5 2D, 2.75 3D)
-  // Walls and debris: modified dynamic boundary conditions (English et al. 2022), or DBC (Crespo et al. 2007).
+  // Walls and debris: modified dynamic boundary conditions (English et al. 2022), or DBC (Crespo et al.
+  // 2007).
   SphBoundary boundary = SphBoundary::kMdbc;
 };
 

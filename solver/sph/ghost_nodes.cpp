@@ -16,7 +16,8 @@ bool open_at(const Scene& s, const Vec3d& q, double tol) {
   for (int d = 0; d < s.dimension; ++d)
     if (q[d] < s.domain_lo[d] - tol || q[d] > s.domain_hi[d] + tol) return false;
   for (const auto& b : s.boundaries)
-    if (b.condition != BoundaryCondition::kSymmetry && shape_distance(b.shape, q, s.dimension) < -tol) return false;
+    if (b.condition != BoundaryCondition::kSymmetry && shape_distance(b.shape, q, s.dimension) < -tol)
+      return false;
   return true;
 }
 

@@ -1,7 +1,8 @@
-// Ghost nodes of the modified dynamic boundary conditions (mDBC, English et al. 2022): each wall particle takes
-// its density from the water at its ghost node, its mirror image across the boundary's surface, extrapolated
-// back to the particle with the density's gradient there. That keeps the water's pressure continuous into the
-// wall, so the water rests against the surface instead of about 1.5 particle spacings off it as with DBC.
+// Ghost nodes of the modified dynamic boundary conditions (mDBC, English et al. 2022): each wall particle
+// takes its density from the water at its ghost node, its mirror image across the boundary's surface,
+// extrapolated back to the particle with the density's gradient there. That keeps the water's pressure
+// continuous into the wall, so the water rests against the surface instead of about 1.5 particle spacings off
+// it as with DBC.
 //
 // The ghost is the particle's reflection through the nearest point of open space: across a face for a
 // particle beside a flat wall or inside a solid's convex edge, through the corner for one in the solid

@@ -199,8 +199,8 @@ FLUME_HD void shift_displacement(const Params<T>& P, const T* gradc, T divr, T s
 }
 
 // mDBC (ghost_nodes.h): the water's density at a wall particle's ghost node g by a first-order corrected SPH
-// interpolation (Liu & Liu 2006, as English et al. 2022 use it). With r = g - x_b and rho_b = rho_g - grad rho
-// . r to first order, the sums of m_b W and m_b grad W over the water are the moment matrix
+// interpolation (Liu & Liu 2006, as English et al. 2022 use it). With r = g - x_b and rho_b = rho_g - grad
+// rho . r to first order, the sums of m_b W and m_b grad W over the water are the moment matrix
 //   A = [[sum V W, sum V W r^T], [sum V grad W, sum V grad W r^T]]   (V = m_b / rho_b)
 // times u = (rho_g, -grad rho).
 template <int D, typename T>
@@ -237,10 +237,10 @@ FLUME_HD void add_reflected_ghost(int axis, const GhostSums<D, T>& m, GhostSums<
 // The wall particle's density, rho_g + grad rho . (x_k - g) for ghost vector gv = g - x_k, floored at rho0 as
 // for DBC (a wall does not pull on the water: near its free surface the water's pressure extrapolates below
 // zero). Returns 0 where the water round the ghost does not support the interpolation: a moment matrix near
-// singular (|det| < 1e-3, DualSPHysics' limit) or a kernel sum sum V W under one half, the value at a flat free
-// surface (the ghost outside the water: a splash or a thin sheet). There the caller keeps DBC's density by
-// continuity, which grows as water closes in on the wall; the Shepard average of a few particles would not,
-// and lets them through.
+// singular (|det| < 1e-3, DualSPHysics' limit) or a kernel sum sum V W under one half, the value at a flat
+// free surface (the ghost outside the water: a splash or a thin sheet). There the caller keeps DBC's density
+// by continuity, which grows as water closes in on the wall; the Shepard average of a few particles would
+// not, and lets them through.
 template <int D, typename T>
 FLUME_HD T ghost_density(const GhostSums<D, T>& S, const T* gv, T rho0) {
   constexpr int N = D + 1;

@@ -5,8 +5,8 @@
 //
 // Fluid particles are stored as structure-of-arrays and re-sorted by cell at the start of every step; the
 // wall particles (fixed; their density from the water at their ghost nodes, mDBC, or evolved by continuity,
-// DBC; floored at rho0) are sorted once. Each loop body reads its neighbours and writes only its own particle: race-free without
-// atomics, and the result does not depend on the number of threads.
+// DBC; floored at rho0) are sorted once. Each loop body reads its neighbours and writes only its own
+// particle: race-free without atomics, and the result does not depend on the number of threads.
 #include <omp.h>
 
 #include <algorithm>
@@ -15,11 +15,11 @@
 #include <sstream>
 
 #include "common/errors.h"
-#include "solver/inflow.h"
-#include "solver/interleave_axes.h"
 #include "solver/checkpoint.h"
 #include "solver/debris_coupling.h"
+#include "solver/inflow.h"
 #include "solver/instruments.h"
+#include "solver/interleave_axes.h"
 #include "solver/seeding.h"
 #include "solver/simulation.h"
 #include "solver/sph/boundary_particles.h"
@@ -255,7 +255,8 @@ class SphSolver final : public Simulation {
       mismatch = mismatch || ((!optional || !a.empty()) && a.size() != n);
     });
     // With an inflow the count is the checkpoint's (the boundary adds and removes particles).
-    if (mismatch || (n != n_ && !inflow_)) ar.fail("particles", "particle arrays of another length than the scene seeds");
+    if (mismatch || (n != n_ && !inflow_))
+      ar.fail("particles", "particle arrays of another length than the scene seeds");
     if (n != n_) resize_scratch(n);
     if (status_ == RunStatus::kUnstable) ar.fail("status", "the checkpointed run had gone unstable");
     if (debris_) bodies_.place(*debris_);
@@ -490,7 +491,8 @@ class SphSolver final : public Simulation {
     }
     if (mdbc_) {
       // A wall particle lies within `layers` lattice steps of open space on every axis.
-      const std::vector<double> ghost = sph::wall_ghost_vectors(scene_, w, (layers + 1) * spacing_ * std::sqrt(D));
+      const std::vector<double> ghost =
+          sph::wall_ghost_vectors(scene_, w, (layers + 1) * spacing_ * std::sqrt(D));
       for (int d = 0; d < D; ++d) gw_[d].resize(nw_);
       for (size_t s = 0; s < nw_; ++s)
         for (int d = 0; d < D; ++d) gw_[d][s] = T(ghost[3 * wall_list_.order[s] + d]);
@@ -758,10 +760,10 @@ class SphSolver final : public Simulation {
   }
 
   // mDBC: the density of boundary particle k (positions XK, ghost vectors GK) from the water (at X, with the
-  // masses and the 1/rho this evaluation computed) round its
-  // ghost node, and round the node's image across a symmetry plane; 0 where that water is too little
-  // (sph::ghost_density).
-  T ghost_density(const std::vector<T>* X, const std::vector<T>* XK, const std::vector<T>* GK, size_t k) const {
+  // masses and the 1/rho this evaluation computed) round its ghost node, and round the node's image across a
+  // symmetry plane; 0 where that water is too little (sph::ghost_density).
+  T ghost_density(const std::vector<T>* X, const std::vector<T>* XK, const std::vector<T>* GK,
+                  size_t k) const {
     T g[D], gv[D];
     for (int d = 0; d < D; ++d) {
       gv[d] = GK[d][k];
@@ -776,7 +778,8 @@ class SphSolver final : public Simulation {
             r2 += r[d] * r[d];
           }
           if (r2 >= P_.support2) continue;
-          sph::pair_ghost<D, T>(P_, r, r2, sph::wendland_gradient_factor(r2, P_), mass_[b], mass_[b] * irf_[b], S);
+          sph::pair_ghost<D, T>(P_, r, r2, sph::wendland_gradient_factor(r2, P_), mass_[b],
+                                mass_[b] * irf_[b], S);
         }
       });
     };

@@ -240,8 +240,9 @@ TEST(Checkpoint, ResumedInflowRepeatsTheUninterruptedRun) {
 // stopped as the bore crosses the inflow plane. K = 2e5 Pa (c0 = 14 m/s) keeps SPH's steps few.
 TEST(Checkpoint, SphResumedInflowRepeatsTheUninterruptedRun) {
   const fs::path dir = temp_dir("inflow_sph");
-  const Scene apron = fed_apron(dir, {parse_override("solver.method=sph"), parse_override("fluid.bulk_modulus=2e5"),
-                                      parse_override("solver.end_time=2.6")});
+  const Scene apron =
+      fed_apron(dir, {parse_override("solver.method=sph"), parse_override("fluid.bulk_modulus=2e5"),
+                      parse_override("solver.end_time=2.6")});
   expect_exact_resume(apron, 2.45);
   fs::remove_all(dir);
 }

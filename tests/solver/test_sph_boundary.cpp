@@ -27,10 +27,13 @@ std::string tank(double dx, const std::string& boundary, double end, bool block)
   return std::string(R"({"name": "sph_tank", "dimension": 2,
     "domain": {"lo": [-0.05, -0.05], "hi": [0.15, 0.2]},
     "solver": {"method": "sph", "dx": )") +
-         std::to_string(dx) + R"(, "ppc": 4, "precision": "double", "end_time": )" + std::to_string(end) + R"(},
-    "sph": {"boundary": ")" + boundary + R"("},
+         std::to_string(dx) + R"(, "ppc": 4, "precision": "double", "end_time": )" + std::to_string(end) +
+         R"(},
+    "sph": {"boundary": ")" +
+         boundary + R"("},
     "fluid": {"bulk_modulus": 5.0e4, "viscosity": 1.0e-3},
-    "water": [{"lo": [0, 0], "hi": [)" + std::to_string(block ? 0.06 : kWidth) + ", " + std::to_string(kDepth) + R"(]}],
+    "water": [{"lo": [0, 0], "hi": [)" +
+         std::to_string(block ? 0.06 : kWidth) + ", " + std::to_string(kDepth) + R"(]}],
     "boundaries": [
       {"name": "floor", "type": "half_space", "point": [0, 0], "normal": [0, 1]},
       {"name": "left", "type": "half_space", "point": [0, 0], "normal": [1, 0]},
@@ -48,26 +51,27 @@ TEST(SphBoundary, GhostNodesMirrorThroughTheNearestOpenPoint) {
     w.x[2].push_back(0);
     w.wall.push_back(0);
   };
-  add(0.03, -0.015);   // under the floor: across it
-  add(-0.005, 0.05);   // beyond the left wall: across it
-  add(-0.015, -0.005); // beyond the concave corner of floor and left wall: through the corner
-  add(0.075, 0.035);   // in the block, 5 mm under its top, 15 mm from its left face: across the top
-  add(0.065, 0.025);   // in the block, 5 mm from its left face: across that face
+  add(0.03, -0.015);    // under the floor: across it
+  add(-0.005, 0.05);    // beyond the left wall: across it
+  add(-0.015, -0.005);  // beyond the concave corner of floor and left wall: through the corner
+  add(0.075, 0.035);    // in the block, 5 mm under its top, 15 mm from its left face: across the top
+  add(0.065, 0.025);    // in the block, 5 mm from its left face: across that face
   const auto g = sph::wall_ghost_vectors(scene, w, 0.05);
   const double want[5][2] = {{0, 0.03}, {0.01, 0}, {0.03, 0.01}, {0, 0.01}, {-0.01, 0}};
   for (int k = 0; k < 5; ++k)
-    for (int d = 0; d < 2; ++d) EXPECT_NEAR(g[3 * k + d], want[k][d], 1e-12) << "particle " << k << " axis " << d;
+    for (int d = 0; d < 2; ++d)
+      EXPECT_NEAR(g[3 * k + d], want[k][d], 1e-12) << "particle " << k << " axis " << d;
 }
 
 // The still tank after 0.6 s (some 20 periods of its acoustic mode, 4 h / c0): where the water rests against
-// the floor and the left wall, and the pressure of its bottom layer. The water's lattice starts half a spacing
-// off a solid (seeding.h), and with mDBC the wall carries the water's own hydrostatic pressure into it, so the
-// bottom layer and the first column stay at 0.5 spacings (the column compresses by rho g h / K = 2 %, a few
-// hundredths of a spacing) and the bottom layer's pressure continues the interior's profile, within a quarter
-// of the hydrostatic step between two layers (rho g s) of the interior's least-squares line. Checked to fail:
-// with the extrapolation's sign flipped the bottom layer reads 1.3 steps low. DBC (kept as an option) rests
-// at 0.47 / 0.45 spacings with a boundary layer of -0.21 steps: in still water flume's DBC, whose particles
-// sit half a spacing inside the solid, has no gap.
+// the floor and the left wall, and the pressure of its bottom layer. The water's lattice starts half a
+// spacing off a solid (seeding.h), and with mDBC the wall carries the water's own hydrostatic pressure into
+// it, so the bottom layer and the first column stay at 0.5 spacings (the column compresses by rho g h / K = 2
+// %, a few hundredths of a spacing) and the bottom layer's pressure continues the interior's profile, within
+// a quarter of the hydrostatic step between two layers (rho g s) of the interior's least-squares line.
+// Checked to fail: with the extrapolation's sign flipped the bottom layer reads 1.3 steps low. DBC (kept as
+// an option) rests at 0.47 / 0.45 spacings with a boundary layer of -0.21 steps: in still water flume's DBC,
+// whose particles sit half a spacing inside the solid, has no gap.
 struct Rest {
   double floor, wall, p_floor;  // spacings, spacings, Pa
 };

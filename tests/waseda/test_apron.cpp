@@ -195,8 +195,8 @@ TEST(Apron, SphInflowInjectsTheRecordedFlux) {
   ASSERT_EQ(test::run_until(*sim, 1.0), RunStatus::kOk) << sim->message();
   const double entered = mass_downstream(*sim, 0.5, mp) - m0, expected = kRho * q;
   const double tol = 2 * kRho * s * (h_max + s);
-  std::printf("SPH: entered %.3f kg/m, recorded flux %.3f kg/m, difference %.3f (tol %.3f, %.1f%%)\n", entered,
-              expected, entered - expected, tol, 100 * tol / expected);
+  std::printf("SPH: entered %.3f kg/m, recorded flux %.3f kg/m, difference %.3f (tol %.3f, %.1f%%)\n",
+              entered, expected, entered - expected, tol, 100 * tol / expected);
   EXPECT_NEAR(entered, expected, tol);
   fs::remove_all(dir);
 }
