@@ -1,8 +1,8 @@
 // SPH's walls by mDBC (English et al. 2022; solver/sph/ghost_nodes.h): each wall particle's ghost node is its
 // mirror image through the nearest point of open space, and its density is the water's there, extrapolated.
-// Checked: the ghost geometry at a flat wall, a concave corner and a solid's convex edge; and the result the
-// method exists for, water resting on the wall's surface (half a spacing off it, where the lattice puts it)
-// where DBC holds it about a spacing further off.
+// Checked: the ghost geometry at a flat wall, a concave corner and a solid's convex edge; and, in still
+// water, the water resting half a spacing off the walls (where its lattice puts it) with the bottom layer's
+// pressure on the interior's hydrostatic line, without DBC's pressure boundary layer.
 #include <gtest/gtest.h>
 
 #include <algorithm>
