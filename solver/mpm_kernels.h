@@ -416,13 +416,18 @@ FLUME_HD void ghost_domain(const double* x, const double* lo, const double* hi, 
   }
 }
 
-// The exchange between a ghost node (mass mg, velocity vg) and its mirror node (mm, vm): along the tangential
-// axes (those not in `axes`) both take their mass-weighted mean velocity, a perfectly inelastic collision.
-// Written as the velocity changes dvg and dvm, computed from the velocities before any exchange, so that a
-// mirror shared by two ghosts (next to a corner) sums both and the nodes can be processed in any order.
-// Momentum is conserved (mg dvg + mm dvm = 0 per pair: the exchange is internal to the water, a free-slip
-// wall exerts no tangential force) and kinetic energy can only fall. Overwriting the ghost's velocity with
-// the mirror's instead is not conservative (docs/solver.md, "Measurements behind the constants").
+// The exchange between a mirror node (mass mm, velocity vm) and the ghost nodes that reflect onto it: along
+// each axis tangential to a ghost, that ghost and the mirror take their mass-weighted mean velocity, a
+// perfectly inelastic collision. Momentum is conserved (the exchange is internal to the water, a free-slip
+// wall exerts no tangential force). Overwriting the ghost's velocity with the mirror's instead is not
+// conservative (docs/solver.md, "Measurements behind the constants").
+//
+// Next to a concave edge or corner several ghosts share one mirror (up to 7 in a 3D corner). They exchange as
+// one group: along each axis, the mirror and every ghost tangential to it take the group's mean. Pairwise
+// exchanges computed from the same velocities and summed at the mirror are not a collision: their impulses do
+// work sum_{i!=j} a_i a_j (dv_i . dv_j) / mm on the final velocities (a_i the pair's reduced mass, dv_i the
+// ghost's velocity relative to the mirror), every step, which grew a particle-scale mode along the floor's
+// edges of a stiff 3D bore (docs/tradeoff.md, "The debris scene"). The group's mean does none.
 //
 // Along the normal axes the ghost is the mirror node's image: the mirror takes the ghost's mass and its
 // normal momentum reflected, mg (-vg_pre), vg_pre being the velocity the particles alone gave the ghost (the
@@ -434,27 +439,67 @@ FLUME_HD void ghost_domain(const double* x, const double* lo, const double* hi, 
 // docs/solver.md). The image's push is what the missing particles would have given; the wall takes it (it is
 // counted in the wall's load). The push only ever slows a mirror node that moves towards the wall, down to
 // rest at most: it is a contact force and does no positive work (unbounded, it pumped energy into a soft
-// tank). It acts on the axes in `push_axes` (image_push_axes: walls with a normal across gravity); elsewhere
-// a normal axis keeps its velocity.
+// tank). Ghosts pushing along one axis pool their images, so that together they too stop the mirror at most;
+// images from both sides of it (a channel a few cells wide) leave it unpushed, as an undefined reflection
+// does. It acts on the axes in `push_axes` (image_push_axes: walls with a normal across gravity); elsewhere a
+// normal axis keeps its velocity.
+//
+// The group's sums, kGhostPoolLanes per axis (lane c of axis a at pool[c * D + a]): the tangential ghosts'
+// mass and momentum, then the pushing ghosts' mass, mass signed by the side away from the wall, and pre-wall
+// momentum. A ghost's terms (ghost_pool_terms) are summed in any order, atomically on a device.
+constexpr int kGhostPoolLanes = 5;
+
 template <int D, typename T>
-FLUME_HD void ghost_exchange(const T* vg, const T* vg_pre, T mg, const T* vm, T mm, unsigned axes, unsigned push_axes,
-                             T* dvg, T* dvm) {
+FLUME_HD void ghost_pool_terms(const T* vg, const T* vg_pre, T mg, unsigned axes, unsigned push_axes,
+                               T* terms) {
+  for (int k = 0; k < kGhostPoolLanes * D; ++k) terms[k] = T(0);
   for (int a = 0; a < D; ++a) {
-    dvg[a] = dvm[a] = T(0);
-    if (axes & (1u << a)) {
-      if (!(push_axes & (1u << a))) continue;
-      const T out = (axes & (1u << (a + kGhostSignShift))) ? T(-1) : T(1);  // away from the wall
-      const T toward = out * vm[a];                                          // < 0: moving towards it
-      if (toward < T(0)) {
-        const T pooled = out * (mm * vm[a] - mg * vg_pre[a]) / (mg + mm);
-        const T slowed = pooled < T(0) ? (pooled > toward ? pooled : toward) : T(0);
-        dvm[a] = out * slowed - vm[a];
-      }
-      continue;
+    if (!(axes & (1u << a))) {
+      terms[a] = mg;
+      terms[D + a] = mg * vg[a];
+    } else if (push_axes & (1u << a)) {
+      terms[2 * D + a] = mg;
+      terms[3 * D + a] = (axes & (1u << (a + kGhostSignShift))) ? -mg : mg;
+      terms[4 * D + a] = mg * vg_pre[a];
     }
-    const T u = (mg * vg[a] + mm * vm[a]) / (mg + mm);
-    dvg[a] = u - vg[a];
-    dvm[a] = u - vm[a];
+  }
+}
+
+// From a mirror's pool: u, the velocity the mirror and its tangential ghosts take along each axis (the
+// mirror's own where no ghost is tangential to it), and push_dv, the image's push on the mirror (the wall's
+// load; zero where none). The push acts first, then the tangential mean: the group ends with one velocity per
+// axis.
+template <int D, typename T>
+FLUME_HD void ghost_pool_velocity(const T* pool, const T* vm, T mm, T* u, T* push_dv) {
+  for (int a = 0; a < D; ++a) {
+    T v = vm[a];
+    const T nm = pool[2 * D + a], ns = pool[3 * D + a];
+    const T minority = (nm - (ns < T(0) ? -ns : ns)) / T(2);  // the pushing mass on the less weighted side
+    if (nm > T(0) && minority <= T(1e-6) * nm) {
+      const T out = ns > T(0) ? T(1) : T(-1);  // away from the wall
+      const T toward = out * v;                // < 0: moving towards it
+      if (toward < T(0)) {
+        const T pooled = out * (mm * v - pool[4 * D + a]) / (nm + mm);
+        const T slowed = pooled < T(0) ? (pooled > toward ? pooled : toward) : T(0);
+        v = out * slowed;
+      }
+    }
+    push_dv[a] = v - vm[a];
+    const T tm = pool[a];
+    u[a] = tm > T(0) ? (pool[D + a] + mm * v) / (tm + mm) : v;
+  }
+}
+
+// One ghost and its mirror alone, as changes: dvg along the ghost's tangential axes, dvm the mirror's.
+template <int D, typename T>
+FLUME_HD void ghost_exchange(const T* vg, const T* vg_pre, T mg, const T* vm, T mm, unsigned axes,
+                             unsigned push_axes, T* dvg, T* dvm) {
+  T pool[kGhostPoolLanes * D], u[D], push_dv[D];
+  ghost_pool_terms<D>(vg, vg_pre, mg, axes, push_axes, pool);
+  ghost_pool_velocity<D>(pool, vm, mm, u, push_dv);
+  for (int a = 0; a < D; ++a) {
+    dvg[a] = (axes & (1u << a)) ? T(0) : u[a] - vg[a];
+    dvm[a] = u[a] - vm[a];
   }
 }
 

@@ -134,7 +134,8 @@ struct View {
   uint8_t* gwall;
   int64_t* ghost_mirror;  // per node: its reflection's grid index (mpm::ghost_half_space), or -1
   uint8_t* ghost_axes;    // per node: the normal axes the reflection keeps
-  T* ghost_dv;            // D x nodes: a ghost's velocity before the walls, then its mirror's velocity change
+  T* ghost_dv;            // D x nodes: a ghost's velocity before the walls, then its group's (GhostExchange)
+  T* ghost_pool;          // kGhostPoolLanes D x nodes: a mirror's sums over its ghosts (mpm::ghost_pool_terms)
   int32_t* ghost_wall;    // per node: the scene wall whose load takes the image's push, or -1
   unsigned push_axes;     // mpm::image_push_axes
   double subcell_rate = 0;  // mpm::subcell_drag's rate0: the sound speed over a cell
@@ -368,6 +369,7 @@ struct GridUpdate {
   View<D, T> s;
   T dt;
   FLUME_HD void operator()(size_t idx) const {
+    for (int c = 0; c < mpm::kGhostPoolLanes * D; ++c) s.ghost_pool[c * s.nodes + idx] = T(0);
     const T m = s.grid[idx];
     if (m <= T(0)) {
       for (int c = 0; c < View<D, T>::kChannels; ++c) s.grid[c * s.nodes + idx] = T(0);
@@ -388,7 +390,7 @@ struct GridUpdate {
     for (int d = 0; d < D; ++d) v[d] = s.grid[(1 + d) * s.nodes + idx] / m + dt * s.gravity[d];
     double xn[D];
     for (int d = 0; d < D; ++d) xn[d] = mpm::node_coordinate(s.grid_lo_d[d], node[d], s.dx_d);
-    // The particles' momentum alone, before gravity and the walls: what a ghost's image reflects (mpm::ghost_exchange).
+    // The particles' momentum alone, before gravity and the walls: what a ghost's image reflects (mpm::ghost_pool_terms).
     for (int d = 0; d < D; ++d) s.ghost_dv[d * s.nodes + idx] = s.grid[(1 + d) * s.nodes + idx] / m;
     mpm::GhostSearch<D> found;
     const bool on_wall = mpm::apply_boundaries<D>(xn, m, v, dt, load_weight, s.dx_d, s.subcell_rate, s.walls,
@@ -408,31 +410,59 @@ struct GridUpdate {
   }
 };
 
-// Ghost nodes exchange tangential momentum with their reflection (mpm::ghost_exchange; GhostReflection::reflect on the CPU),
-// once every node is updated, in two passes: each ghost computes the exchange from the velocities the update
-// left, applies its own change and keeps its mirror's (mirrors are free nodes, so the first pass reads no node it
-// writes); then the mirrors' changes are added, atomically where a mirror is shared.
+// Ghost nodes exchange tangential momentum with their reflection, every ghost of a mirror as one group
+// (mpm::ghost_pool_velocity; GhostReflection::reflect on the CPU), once every node is updated, in three passes:
+// the ghosts add their terms to their mirror's pool (atomically where a mirror is shared); each ghost computes
+// its group's velocities from the pool and the mirror's untouched velocity, takes its own, adds its share of
+// the image's push to its wall's load and keeps the mirror's; then the mirrors take theirs (every ghost of a
+// group writes the same values).
 template <int D, typename T>
 FLUME_HD bool ghost_pair(const View<D, T>& s, size_t idx, int64_t& mi) {
   mi = s.ghost_mirror[idx];
   return mi >= 0 && s.grid[idx] > T(0) && s.grid[mi] > T(0) && !s.gwall[mi];
 }
 template <int D, typename T>
+struct GhostPoolAdd {
+  View<D, T> s;
+  FLUME_HD void operator()(size_t idx) const {
+    int64_t mi;
+    if (!ghost_pair(s, idx, mi)) return;
+    T vg[D], vpre[D], terms[mpm::kGhostPoolLanes * D];
+    for (int d = 0; d < D; ++d) {
+      vg[d] = s.grid[(1 + d) * s.nodes + idx];
+      vpre[d] = s.ghost_dv[d * s.nodes + idx];
+    }
+    mpm::ghost_pool_terms<D>(vg, vpre, s.grid[idx], s.ghost_axes[idx], s.push_axes, terms);
+    for (int c = 0; c < mpm::kGhostPoolLanes * D; ++c)
+      if (terms[c] != T(0)) mpm::accumulate(&s.ghost_pool[c * s.nodes + mi], terms[c]);
+  }
+};
+template <int D, typename T>
 struct GhostExchange {
   View<D, T> s;
   FLUME_HD void operator()(size_t idx) const {
     int64_t mi;
     if (!ghost_pair(s, idx, mi)) return;
-    T vg[D], vpre[D], vm[D], dvg[D], dvm[D];
-    for (int d = 0; d < D; ++d) {
-      vg[d] = s.grid[(1 + d) * s.nodes + idx];
-      vpre[d] = s.ghost_dv[d * s.nodes + idx];
-      vm[d] = s.grid[(1 + d) * s.nodes + mi];
+    T pool[mpm::kGhostPoolLanes * D], vm[D], u[D], push_dv[D];
+    for (int c = 0; c < mpm::kGhostPoolLanes * D; ++c) pool[c] = s.ghost_pool[c * s.nodes + mi];
+    for (int d = 0; d < D; ++d) vm[d] = s.grid[(1 + d) * s.nodes + mi];
+    mpm::ghost_pool_velocity<D>(pool, vm, s.grid[mi], u, push_dv);
+    const unsigned axes = s.ghost_axes[idx];
+    const int wall = s.ghost_wall[idx];
+    double load_weight = 1;  // 1/2 on a symmetry plane (GridUpdate)
+    if (s.has_sym && s.impulse && wall >= 0) {
+      int node[D];
+      s.node_of(idx, node);
+      if (mpm::symmetry_side(s.sym, node[s.sym.axis]) == 0) load_weight = 0.5;
     }
-    mpm::ghost_exchange<D>(vg, vpre, s.grid[idx], vm, s.grid[mi], s.ghost_axes[idx], s.push_axes, dvg, dvm);
     for (int d = 0; d < D; ++d) {
-      s.grid[(1 + d) * s.nodes + idx] = vg[d] + dvg[d];
-      s.ghost_dv[d * s.nodes + idx] = dvm[d];
+      if (!(axes & (1u << d))) s.grid[(1 + d) * s.nodes + idx] = u[d];
+      s.ghost_dv[d * s.nodes + idx] = u[d];
+      // The image's push, by this ghost's share of the pushing mass, is its wall's load.
+      const T nm = pool[2 * D + d];
+      if (s.impulse && wall >= 0 && (axes & (1u << d)) && nm > T(0))
+        mpm::accumulate(&s.impulse[wall * D + d],
+                        -load_weight * double(s.grid[mi]) * double(push_dv[d] * (s.grid[idx] / nm)));
     }
   }
 };
@@ -442,20 +472,7 @@ struct GhostMirrorUpdate {
   FLUME_HD void operator()(size_t idx) const {
     int64_t mi;
     if (!ghost_pair(s, idx, mi)) return;
-    const int wall = s.ghost_wall[idx];
-    double load_weight = 1;  // 1/2 on a symmetry plane (GridUpdate)
-    if (s.has_sym && s.impulse && wall >= 0) {
-      int node[D];
-      s.node_of(idx, node);
-      if (mpm::symmetry_side(s.sym, node[s.sym.axis]) == 0) load_weight = 0.5;
-    }
-    for (int d = 0; d < D; ++d) {
-      mpm::accumulate(&s.grid[(1 + d) * s.nodes + mi], s.ghost_dv[d * s.nodes + idx]);
-      // The normal part (the image's push) is the wall's load. The mirror's mass is read before any change.
-      if (s.impulse && wall >= 0 && (s.ghost_axes[idx] & (1u << d)))
-        mpm::accumulate(&s.impulse[wall * D + d],
-                        -load_weight * double(s.grid[mi]) * double(s.ghost_dv[d * s.nodes + idx]));
-    }
+    for (int d = 0; d < D; ++d) s.grid[(1 + d) * s.nodes + mi] = s.ghost_dv[d * s.nodes + idx];
   }
 };
 
@@ -789,6 +806,7 @@ class MpmCuda final : public Simulation, private mpm::SceneConstants<D, T> {
     if (s.has_sym) mpm::parallel_for(s.nodes, SymmetryFold<D, T>{s});
     mpm::parallel_for(s.nodes, GridUpdate<D, T>{s, T(dt)});
     if (debris_) find_coupling_nodes(s);
+    mpm::parallel_for(s.nodes, GhostPoolAdd<D, T>{s});
     mpm::parallel_for(s.nodes, GhostExchange<D, T>{s});
     mpm::parallel_for(s.nodes, GhostMirrorUpdate<D, T>{s});
     if (s.has_sym) mpm::parallel_for(s.nodes, SymmetryMirror<D, T>{s});
@@ -829,7 +847,7 @@ class MpmCuda final : public Simulation, private mpm::SceneConstants<D, T> {
   size_t grid_bytes() const override {
     return grid_.capacity() * sizeof(T) + gwall_.capacity() + ghost_axes_.capacity() +
            ghost_mirror_.capacity() * sizeof(int64_t) + ghost_dv_.capacity() * sizeof(T) +
-           ghost_wall_.capacity() * sizeof(int32_t) +
+           ghost_pool_.capacity() * sizeof(T) + ghost_wall_.capacity() * sizeof(int32_t) +
            (gkeys_.capacity() + pkeys_.capacity()) * sizeof(uint64_t) + p_nbr_.capacity() * sizeof(int32_t);
   }
   size_t active_blocks() const override { return gkeys_.size(); }
@@ -992,6 +1010,7 @@ class MpmCuda final : public Simulation, private mpm::SceneConstants<D, T> {
     s.ghost_mirror = raw(ghost_mirror_);
     s.ghost_axes = raw(ghost_axes_);
     s.ghost_dv = raw(ghost_dv_);
+    s.ghost_pool = raw(ghost_pool_);
     s.ghost_wall = raw(ghost_wall_);
     s.nodes = gkeys_.size() * kNodes;
     s.dx = T(dx_);
@@ -1079,6 +1098,7 @@ class MpmCuda final : public Simulation, private mpm::SceneConstants<D, T> {
     ghost_mirror_.resize(nodes);
     ghost_axes_.resize(nodes);
     ghost_dv_.resize(D * nodes);
+    ghost_pool_.resize(mpm::kGhostPoolLanes * D * nodes);
     ghost_wall_.resize(nodes);
     needs_sort_ = false;
   }
@@ -1281,7 +1301,8 @@ class MpmCuda final : public Simulation, private mpm::SceneConstants<D, T> {
   thr::device_vector<T> grid_;
   thr::device_vector<uint8_t> gwall_, ghost_axes_;
   thr::device_vector<int64_t> ghost_mirror_;
-  thr::device_vector<T> ghost_dv_;  // D x nodes
+  thr::device_vector<T> ghost_dv_;    // D x nodes
+  thr::device_vector<T> ghost_pool_;  // kGhostPoolLanes D x nodes
   thr::device_vector<int32_t> ghost_wall_;
   thr::device_vector<Wall<D, T>> walls_;
   thr::device_vector<double> impulse_;

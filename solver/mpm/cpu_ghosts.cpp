@@ -24,39 +24,70 @@ void GhostReflection<D, T>::reflect(GridNodes<D, T>& grid, const std::vector<uin
   }
   if (!std::is_sorted(all_.begin(), all_.end(), by_node))  // a schedule that does not keep the order
     std::sort(all_.begin(), all_.end(), by_node);
-  // The exchanges in parallel (each writes its own ghost and its own entry), the mirrors' changes in order.
+  // Each ghost's mirror; a mirror without water or itself a wall node takes no exchange.
   const long count = static_cast<long>(all_.size());
   mirror_dv_.resize(all_.size());
 #pragma omp parallel for schedule(static)
   for (long q = 0; q < count; ++q) {
-    const Ghost<D, T>& gh = all_[q];
     MirrorChange& c = mirror_dv_[q];
     c.node = kNoMirror;
-    const long gi = grid_index<D>(gkeys, gh.offset);
+    for (int d = 0; d < D; ++d) c.dv[d] = T(0);
+    const long gi = grid_index<D>(gkeys, all_[q].offset);
     if (gi < 0) continue;
     const size_t mi = static_cast<size_t>(gi);
-    if (grid.m[mi] <= T(0) || grid.wall[mi]) continue;
-    T vg[D], vm[D], dvg[D];
-    for (int d = 0; d < D; ++d) {
-      vg[d] = grid.v[d][gh.idx];
-      vm[d] = grid.v[d][mi];
-    }
-    ghost_exchange<D>(vg, gh.vpre, grid.m[gh.idx], vm, grid.m[mi], gh.axes, push_axes_, dvg, c.dv);
-    for (int d = 0; d < D; ++d)
-      grid.v[d][gh.idx] += dvg[d];  // ghosts are never mirrors: no exchange reads it
-    c.node = mi;
+    if (grid.m[mi] > T(0) && !grid.wall[mi]) c.node = mi;
   }
-  // The mirrors' changes in ghost order; the normal part of each (the image's push) is the wall's load.
+  // The ghosts grouped by mirror, each group in ghost order (its sums then do not depend on the threads).
+  by_mirror_.clear();
+  for (long q = 0; q < count; ++q)
+    if (mirror_dv_[q].node != kNoMirror) by_mirror_.push_back(static_cast<uint64_t>(q));
+  std::sort(by_mirror_.begin(), by_mirror_.end(), [&](uint64_t a, uint64_t b) {
+    return mirror_dv_[a].node != mirror_dv_[b].node ? mirror_dv_[a].node < mirror_dv_[b].node : a < b;
+  });
+  group_start_.clear();
+  for (size_t k = 0; k < by_mirror_.size(); ++k)
+    if (k == 0 || mirror_dv_[by_mirror_[k]].node != mirror_dv_[by_mirror_[k - 1]].node)
+      group_start_.push_back(k);
+  group_start_.push_back(by_mirror_.size());
+  // Each group exchanges at once (mpm::ghost_pool_velocity); groups share no node, so they run in parallel.
+  const long groups = static_cast<long>(group_start_.size()) - 1;
+#pragma omp parallel for schedule(static)
+  for (long k = 0; k < groups; ++k) {
+    const size_t mi = mirror_dv_[by_mirror_[group_start_[k]]].node;
+    T pool[kGhostPoolLanes * D] = {}, terms[kGhostPoolLanes * D], vm[D], u[D], push_dv[D];
+    for (size_t j = group_start_[k]; j < group_start_[k + 1]; ++j) {
+      const Ghost<D, T>& gh = all_[by_mirror_[j]];
+      T vg[D];
+      for (int d = 0; d < D; ++d) vg[d] = grid.v[d][gh.idx];
+      ghost_pool_terms<D>(vg, gh.vpre, grid.m[gh.idx], gh.axes, push_axes_, terms);
+      for (int c = 0; c < kGhostPoolLanes * D; ++c) pool[c] += terms[c];
+    }
+    for (int d = 0; d < D; ++d) vm[d] = grid.v[d][mi];
+    ghost_pool_velocity<D>(pool, vm, grid.m[mi], u, push_dv);
+    for (size_t j = group_start_[k]; j < group_start_[k + 1]; ++j) {
+      const size_t q = by_mirror_[j];
+      const Ghost<D, T>& gh = all_[q];
+      for (int d = 0; d < D; ++d) {
+        if (!(gh.axes & (1u << d))) {
+          grid.v[d][gh.idx] = u[d];  // ghosts are never mirrors: no other group reads it
+        } else if (pool[2 * D + d] > T(0)) {
+          mirror_dv_[q].dv[d] =
+              push_dv[d] * (grid.m[gh.idx] / pool[2 * D + d]);  // the push by its share of mass
+        }
+      }
+    }
+    for (int d = 0; d < D; ++d) grid.v[d][mi] = u[d];
+  }
+  // The image's push is the walls' load, in ghost order.
   for (size_t q = 0; q < mirror_dv_.size(); ++q) {
     const MirrorChange& c = mirror_dv_[q];
     if (c.node == kNoMirror) continue;
     const Ghost<D, T>& gh = all_[q];
-    for (int d = 0; d < D; ++d) {
-      grid.v[d][c.node] += c.dv[d];
-      if (gh.wall >= 0 && (gh.axes & (1u << d)))
+    if (gh.wall < 0) continue;
+    for (int d = 0; d < D; ++d)
+      if (gh.axes & (1u << d))
         load_impulse[static_cast<size_t>(gh.wall) * D + d] -=
             gh.load_weight * double(grid.m[c.node]) * double(c.dv[d]);
-    }
   }
 }
 

@@ -1,7 +1,7 @@
-// The CPU backend's ghost nodes (mpm::ghost_exchange): a node beside a wall that finds its reflection in the
-// water exchanges tangential momentum with it. The grid update lists the ghosts per thread; reflect() then
-// computes every exchange from the velocities the update left, applies the ghosts' changes at once and sums
-// the mirrors' after, in ghost-node order, so that the result does not depend on the thread count.
+// The CPU backend's ghost nodes (mpm::ghost_pool_velocity): a node beside a wall that finds its reflection in
+// the water exchanges tangential momentum with it, together with every other ghost reflecting onto the same
+// mirror. The grid update lists the ghosts per thread; reflect() groups them by mirror, sums each group in
+// ghost-node order and adds the loads in that order, so that the result does not depend on the thread count.
 #pragma once
 #include <cstddef>
 #include <cstdint>
@@ -16,7 +16,7 @@ struct Ghost {
   size_t idx = 0;          // the ghost node
   int offset[D] = {};      // the reflection's offset in nodes, then (after the walls) the mirror node
   unsigned axes = 0;       // the normal axes: kept; the others are exchanged with the mirror
-  T vpre[D] = {};          // the ghost's velocity from the particles alone (mpm::ghost_exchange)
+  T vpre[D] = {};          // the ghost's velocity from the particles alone (mpm::ghost_pool_terms)
   int wall = -1;           // the scene wall whose load takes the image's push (-1: the domain box)
   double load_weight = 1;  // 1/2 on a symmetry plane (the whole's load there is twice the half's)
 };
@@ -35,8 +35,8 @@ class GhostReflection {
 
  private:
   struct MirrorChange {
-    size_t node;
-    T dv[D];
+    size_t node;  // the mirror, kNoMirror where the ghost has none with water
+    T dv[D];      // the ghost's share of the image's push on it
   };
   static constexpr size_t kNoMirror = ~size_t(0);
   unsigned push_axes_ = 0;
@@ -45,7 +45,9 @@ class GhostReflection {
   };
   std::vector<ThreadList> ghosts_;       // per thread: this step's ghost nodes
   std::vector<Ghost<D, T>> all_;         // all of them, in node order
-  std::vector<MirrorChange> mirror_dv_;  // the mirrors' velocity changes, applied after every exchange
+  std::vector<MirrorChange> mirror_dv_;  // per ghost in all_'s order
+  std::vector<uint64_t> by_mirror_;  // the ghosts with a mirror (indices into all_), by mirror, then ghost
+  std::vector<size_t> group_start_;  // where each mirror's ghosts begin in by_mirror_
 };
 
 }  // namespace flume::mpm

@@ -7,6 +7,7 @@
 #include <utility>
 #include <vector>
 
+#include "solver/mpm/cpu_ghosts.h"
 #include "solver/mpm_kernels.h"
 
 namespace {
@@ -157,6 +158,60 @@ TEST(GhostMirror, ImagePushBalancesTheOneSidedPressureNextToAWall) {
   const unsigned axes_r = (1u << 0) | (1u << (0 + flume::mpm::kGhostSignShift));
   flume::mpm::ghost_exchange<2>(vg, vpre_r, mg, vm_r, mm, axes_r, 3u, dvg, dvm);
   EXPECT_NEAR(vm_r[0] + dvm[0], 0.0, 1e-18);
+}
+
+// Next to a concave edge three ghosts reflect onto one mirror node (one beyond each wall, one beyond both),
+// here with as much water as the mirror, as where the water has run into the corner. They and the mirror are
+// one perfectly inelastic collision: along z, tangential to every wall, momentum is conserved, all four leave
+// with one velocity and the impulses do no work on it; along x the two images of the wall at x < 0 pooled
+// stop the mirror at most, and the wall takes that push once. Pairwise exchanges summed at the mirror did
+// work (2/3 J here), left the mirror at rest and the ghosts moving, and reversed the mirror off the wall.
+TEST(GhostMirror, GhostsSharingAMirrorExchangeAsOneCollision) {
+  using flume::mpm::Ghost;
+  using Grid = flume::mpm::GridNodes<3, double>;
+  const std::vector<uint64_t> gkeys = {0};  // one block, nodes (0..3)^3
+  const auto index = [](int i, int j, int k) { return static_cast<size_t>((i * 4 + j) * 4 + k); };
+  Grid grid;
+  grid.resize(64);
+  const size_t mirror = index(1, 1, 1);
+  grid.m[mirror] = 1.0;
+  const double vm[3] = {-0.2, 0.0, 1.0};  // towards the wall at x < 0, along the edge
+  for (int d = 0; d < 3; ++d) grid.v[d][mirror] = vm[d];
+  struct Spec {
+    int i, j;
+    unsigned axes;
+  };
+  std::vector<Ghost<3, double>> ghosts;
+  for (const Spec& s : {Spec{0, 0, 3u}, Spec{0, 1, 1u}, Spec{1, 0, 2u}}) {  // in node order
+    Ghost<3, double> g;
+    g.idx = index(s.i, s.j, 1);
+    g.axes = s.axes;
+    g.offset[0] = g.offset[1] = g.offset[2] = 1;  // the mirror node
+    g.vpre[0] = g.vpre[1] = -1.0;                 // pushed into the walls by the water
+    g.wall = 0;
+    grid.m[g.idx] = 0.5;
+    grid.wall[g.idx] = 1;
+    ghosts.push_back(g);
+  }
+  flume::mpm::GhostReflection<3, double> reflection;
+  reflection.set_push_axes(3u);
+  reflection.begin(1);
+  *reflection.thread_list(0) = ghosts;
+  std::vector<double> load(3, 0.0);
+  reflection.reflect(grid, gkeys, load);
+
+  double momentum = 0, work = 0;
+  for (size_t i : {mirror, ghosts[0].idx, ghosts[1].idx, ghosts[2].idx}) {
+    const double before = i == mirror ? vm[2] : 0.0;
+    momentum += grid.m[i] * grid.v[2][i];
+    work += grid.m[i] * (grid.v[2][i] - before) * grid.v[2][i];
+    EXPECT_NEAR(grid.v[2][i], grid.v[2][mirror], 1e-15) << "node " << i;
+  }
+  EXPECT_NEAR(momentum, grid.m[mirror] * vm[2], 1e-15);
+  EXPECT_NEAR(work, 0.0, 1e-15);
+  EXPECT_LE(grid.v[0][mirror], 0.0) << "the images stop the mirror at most";
+  EXPECT_GE(grid.v[0][mirror], vm[0]);
+  EXPECT_NEAR(std::fabs(load[0]), grid.m[mirror] * (grid.v[0][mirror] - vm[0]), 1e-15);
 }
 
 // Walls push with their ghosts' image across gravity only: a 2D scene's side walls (x), a 3D scene's side walls and
