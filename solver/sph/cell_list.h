@@ -105,4 +105,26 @@ inline void for_each_neighbour_range(const CellGrid<D>& g, const CellList& list,
   }
 }
 
+// Calls f(begin, end) for the contiguous ranges of `list`'s particles in slab s: the cells whose coordinate
+// along `axis` lies in [s w, (s + 1) w), row by row in cell order.
+template <int D, class F>
+inline void for_each_slab_range(const CellGrid<D>& g, const CellList& list, int axis, int w, int s, const F& f) {
+  const int c0 = s * w, c1 = std::min(g.n[axis], c0 + w);  // the slab's cells along the axis: [c0, c1)
+  if (c0 >= c1) return;
+  const int x0 = axis == 0 ? c0 : 0, x1 = axis == 0 ? c1 : g.n[0];
+  auto row = [&](std::size_t base) {
+    const uint32_t b = list.start[base + x0], e = list.start[base + x1];
+    if (b < e) f(b, e);
+  };
+  if constexpr (D == 2) {
+    const int z0 = axis == 1 ? c0 : 0, z1 = axis == 1 ? c1 : g.n[1];
+    for (int z = z0; z < z1; ++z) row(std::size_t(z) * g.n[0]);
+  } else {
+    const int y0 = axis == 1 ? c0 : 0, y1 = axis == 1 ? c1 : g.n[1];
+    const int z0 = axis == 2 ? c0 : 0, z1 = axis == 2 ? c1 : g.n[2];
+    for (int z = z0; z < z1; ++z)
+      for (int y = y0; y < y1; ++y) row((std::size_t(z) * g.n[1] + y) * g.n[0]);
+  }
+}
+
 }  // namespace flume::sph

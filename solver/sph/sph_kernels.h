@@ -88,28 +88,37 @@ struct Accum {
 // pressure gradient (eq. 9: -sum_b m_b (p_a + p_b) / (rho_a rho_b) grad W) and the viscosity: laminar (Lo &
 // Shao 2002, eq. 9's second term) or Monaghan's artificial viscosity when alpha > 0. v_ab uses a wall
 // particle's prescribed velocity.
+// Every pair function takes b's sums too (`B`, with a's mass m_a), for a fluid pair evaluated once for both
+// particles: b's terms are a's with a and b exchanged, r_ba = -r_ab and v_ba = -v_ab with the same F, so the
+// dot product, the kernel and the symmetric factors are computed once. Without B only a's side is summed.
 template <int D, typename T>
 FLUME_HD void pair_common(const Params<T>& P, const T* rab, T r2, T F, const T* vab, T rho_a, T inv_rho_a,
-                          T p_a, T rho_b, T inv_rho_b, T p_b, T m_b, Accum<D, T>& A) {
+                          T p_a, T rho_b, T inv_rho_b, T p_b, T m_b, Accum<D, T>& A, T m_a = T(0),
+                          Accum<D, T>* B = nullptr) {
   T dot = 0;
   for (int d = 0; d < D; ++d) dot += vab[d] * rab[d];
-  const T mF = m_b * F;
-  A.drho += mF * dot * (rho_a * inv_rho_b);
+  A.drho += m_b * F * dot * (rho_a * inv_rho_b);
   const T inv_r2 = T(1) / (r2 + P.eta2);
   const T vdt = std::fabs(dot) * inv_r2;
   A.visc_dt = vdt > A.visc_dt ? vdt : A.visc_dt;
-  T press = -mF * (p_a + p_b) * (inv_rho_a * inv_rho_b);
+  // The acceleration's factors on r_ab (pressure, artificial viscosity) and on v_ab (laminar), per unit of
+  // the other particle's mass.
+  T press = -F * (p_a + p_b) * (inv_rho_a * inv_rho_b), lam = 0;
   if (P.alpha > T(0)) {
     if (dot < T(0)) {  // approaching pairs only (Monaghan 1992): Pi_ab = -alpha c0 mu / rho_mean
       const T mu = P.h * dot * inv_r2;
-      press += mF * P.alpha * P.c0 * mu / (T(0.5) * (rho_a + rho_b));
+      press += F * P.alpha * P.c0 * mu / (T(0.5) * (rho_a + rho_b));
     }
-    for (int d = 0; d < D; ++d) A.acc[d] += press * rab[d];
   } else {
-    const T lam = mF * T(4) * P.nu * r2 * inv_r2 / (rho_a + rho_b);
-    for (int d = 0; d < D; ++d) A.acc[d] += press * rab[d] + lam * vab[d];
+    lam = F * T(4) * P.nu * r2 * inv_r2 / (rho_a + rho_b);
   }
+  for (int d = 0; d < D; ++d) A.acc[d] += m_b * (press * rab[d] + lam * vab[d]);
   ++A.pairs;
+  if (!B) return;
+  B->drho += m_a * F * dot * (rho_b * inv_rho_a);
+  B->visc_dt = vdt > B->visc_dt ? vdt : B->visc_dt;
+  for (int d = 0; d < D; ++d) B->acc[d] -= m_a * (press * rab[d] + lam * vab[d]);
+  ++B->pairs;
 }
 
 // d rho / d p at a particle, rho / c^2 with the Tait law's local sound speed c^2 = gamma (p + B) / rho: the
@@ -127,21 +136,27 @@ FLUME_HD T hydrostatic_density_slope(T rho, T p, const Params<T>& P) {
 // computed from next.
 template <int D, typename T>
 FLUME_HD void pair_fluid_extras(const Params<T>& P, const T* rab, T r2, T F, const T* vab, T rho_a, T k_a,
-                                T rho_b, T inv_rho_b, T m_b, const T* tau_a, const T* tau_b, Accum<D, T>& A) {
+                                T rho_b, T inv_rho_b, T m_b, const T* tau_a, const T* tau_b, Accum<D, T>& A,
+                                T k_b = T(0), T m_a = T(0), T inv_rho_a = T(0), Accum<D, T>* B = nullptr) {
   T g_dot_r = 0;
   for (int d = 0; d < D; ++d) g_dot_r += P.g[d] * rab[d];
-  const T drho_dyn = (rho_a - rho_b) - k_a * g_dot_r;
-  const T V_b = m_b * inv_rho_b;
-  A.drho += P.ddt * T(2) * drho_dyn * F * r2 / (r2 + P.eta2) * V_b;
+  const T V_b = m_b * inv_rho_b, V_a = m_a * inv_rho_a;
+  const T diffusion = P.ddt * T(2) * F * r2 / (r2 + P.eta2);
+  A.drho += diffusion * ((rho_a - rho_b) - k_a * g_dot_r) * V_b;
+  if (B) B->drho += diffusion * ((rho_b - rho_a) + k_b * g_dot_r) * V_a;
   if (P.alpha > T(0)) return;
   for (int i = 0; i < D; ++i) {
     T s = 0;
     for (int j = 0; j < D; ++j) {
       const int k = Sym<D>::at(i, j);
       s += (tau_a[k] + tau_b[k]) * rab[j];
-      A.gradv[i * D + j] -= V_b * vab[i] * F * rab[j];  // grad v = sum_b V_b (v_b - v_a) (x) grad_a W
+      // grad v = sum_b V_b (v_b - v_a) (x) grad_a W; for b, V_a (v_a - v_b) (x) grad_b W: the same sign.
+      const T gv = vab[i] * F * rab[j];
+      A.gradv[i * D + j] -= V_b * gv;
+      if (B) B->gradv[i * D + j] -= V_a * gv;
     }
     A.acc[i] += m_b * F * s;
+    if (B) B->acc[i] -= m_a * F * s;
   }
 }
 
@@ -175,10 +190,14 @@ FLUME_HD void sps_stress(const Params<T>& P, const T* gradv, T rho, T* tau) {
 // div r is below the threshold (the surface layer) is not shifted, and one between it and D is shifted by
 // the fraction (div r - tfs) / (D - tfs). Pair sums:
 template <int D, typename T>
-FLUME_HD void pair_shift(const T* rab, T r2, T F, T V_b, Accum<D, T>& A) {
+FLUME_HD void pair_shift(const T* rab, T r2, T F, T V_b, Accum<D, T>& A, T V_a = T(0), Accum<D, T>* B = nullptr) {
   const T vf = V_b * F;
   for (int d = 0; d < D; ++d) A.gradc[d] += vf * rab[d];
   A.divr -= vf * r2;
+  if (!B) return;
+  const T uf = V_a * F;  // grad_b W_ba = -F r_ab
+  for (int d = 0; d < D; ++d) B->gradc[d] -= uf * rab[d];
+  B->divr -= uf * r2;
 }
 // The displacement over a step dt for a particle moving at `speed`, at most P.shift_max long (DualSPHysics
 // bounds each component by a tenth of the particle spacing; here the vector's length, so the direction is

@@ -402,6 +402,8 @@ class SphSolver final : public Simulation {
     drho_.resize(n);
     pf_.resize(n);
     irf_.resize(n);
+    kf_.resize(n);
+    for (auto& g : gradv_) g.resize(n);
     visc_dt_.resize(n);
     pairs_.resize(n);
     for (int k = 0; k < kS; ++k) tau_next_[k].resize(n);
@@ -464,6 +466,12 @@ class SphSolver final : public Simulation {
     if (!grid_.init(lo, hi, kCellOverH * h_, size_t(1) << 31))
       throw InputError(scene_.file, "solver.dx",
                        "the SPH cell grid over the domain would exceed 2^31 cells: use a larger dx");
+    // Slabs for the pair-once scatter (fluid_pairs): across the grid's longest axis, each as wide as the
+    // largest cell distance between two particles within 2h of each other, each having drifted since its sort.
+    slab_axis_ = 0;
+    for (int d = 1; d < D; ++d)
+      if (grid_.n[d] > grid_.n[slab_axis_]) slab_axis_ = d;
+    slab_w_ = static_cast<int>(std::floor((2 + 2 * kDriftOverH) * h_ * grid_.inv_size)) + 1;
     nw_ = w.size();
     // Sorted by cell once: the walls do not move.
     wall_list_.cell.resize(nw_);
@@ -639,6 +647,7 @@ class SphSolver final : public Simulation {
     sph::parallel_for(n_, [&](size_t i) {
       pf_[i] = sph::tait_pressure(R[i], P);
       irf_[i] = T(1) / R[i];
+      kf_[i] = sph::hydrostatic_density_slope(R[i], pf_[i], P);
     });
     if (mdbc_) {
       // The walls' and the boxes' densities from the water at their ghost nodes, this state's; where too
@@ -663,24 +672,27 @@ class SphSolver final : public Simulation {
     });
     const T lift = T(hold_lift(t));
     const bool sps = !artificial_;
+    fluid_pairs(X, V, R, shift_sums, sps);
     sph::parallel_for(n_, [&](size_t a) {
       T xa[D], va[D];
       for (int d = 0; d < D; ++d) {
         xa[d] = X[d][a];
         va[d] = V[d][a];
       }
-      const T rho_a = R[a], ira = irf_[a], p_a = pf_[a], k_a = sph::hydrostatic_density_slope(rho_a, p_a, P);
-      T tau_a[kS];
-      for (int k = 0; k < kS; ++k) tau_a[k] = tau_[k][a];
-      // The sums over the fluid and the walls around the point x moving at v, for a particle of stress tau.
-      auto gather = [&](const sph::Params<T>& Q, const T* x, const T* v, const T* tau, Accum<D, T>& A) {
-        for_pairs(fluid_list_, X, V, x, v, [&](uint32_t b, const T* rab, T r2, const T* vab, T F) {
-          sph::pair_common<D, T>(Q, rab, r2, F, vab, rho_a, ira, p_a, R[b], irf_[b], pf_[b], mass_[b], A);
-          T tau_b[kS];
-          for (int k = 0; k < kS; ++k) tau_b[k] = tau_[k][b];
-          sph::pair_fluid_extras<D, T>(Q, rab, r2, F, vab, rho_a, k_a, R[b], irf_[b], mass_[b], tau, tau_b, A);
-          if (shift_sums) sph::pair_shift<D, T>(rab, r2, F, mass_[b] * irf_[b], A);
-        });
+      const T rho_a = R[a], ira = irf_[a], p_a = pf_[a];
+      // The sums over the walls and the boxes around the point x moving at v, and with `fluid` over the water
+      // too (at a particle's image, whose pairs fluid_pairs does not hold).
+      auto gather = [&](const sph::Params<T>& Q, const T* x, const T* v, const T* tau, bool fluid,
+                        Accum<D, T>& A) {
+        if (fluid)
+          for_pairs(fluid_list_, X, V, x, v, [&](uint32_t b, const T* rab, T r2, const T* vab, T F) {
+            sph::pair_common<D, T>(Q, rab, r2, F, vab, rho_a, ira, p_a, R[b], irf_[b], pf_[b], mass_[b], A);
+            T tau_b[kS];
+            for (int k = 0; k < kS; ++k) tau_b[k] = tau_[k][b];
+            sph::pair_fluid_extras<D, T>(Q, rab, r2, F, vab, rho_a, kf_[a], R[b], irf_[b], mass_[b], tau, tau_b,
+                                         A);
+            if (shift_sums) sph::pair_shift<D, T>(rab, r2, F, mass_[b] * irf_[b], A);
+          });
         for_pairs(wall_list_, xw_, vw_, x, v, [&](uint32_t b, const T* rab, T r2, const T* vab, T F) {
           sph::pair_common<D, T>(Q, rab, r2, F, vab, rho_a, ira, p_a, RW[b], irw_[b], pw_[b], mw_, A);
           if (shift_sums) sph::pair_shift<D, T>(rab, r2, F, mw_ * irw_[b], A);
@@ -691,15 +703,16 @@ class SphSolver final : public Simulation {
           if (shift_sums) sph::pair_shift<D, T>(rab, r2, F, B.mass[b] * B.ir[b], A);
         });
       };
-      Accum<D, T> A;
-      gather(P, xa, va, tau_a, A);
+      Accum<D, T> A = fluid_sums(a, shift_sums, sps);
+      gather(P, xa, va, nullptr, false, A);
       if (near_mirror(xa)) {  // the images across the symmetry plane, gathered at this particle's own image
-        T xm[D], vm[D], tau_m[kS];
+        T tau_a[kS], xm[D], vm[D], tau_m[kS];
+        for (int k = 0; k < kS; ++k) tau_a[k] = tau_[k][a];
         sph::reflect_point<D>(mirror_.axis, T(mirror_.at), xa, xm);
         sph::reflect_vector<D>(mirror_.axis, va, vm);
         sph::reflect_sym<D>(mirror_.axis, tau_a, tau_m);
         Accum<D, T> M;
-        gather(Pm_, xm, vm, tau_m, M);
+        gather(Pm_, xm, vm, tau_m, true, M);
         sph::add_reflected(mirror_.axis, M, A);
       }
       if (shift_sums) {
@@ -757,6 +770,87 @@ class SphSolver final : public Simulation {
 #pragma omp parallel for reduction(+ : pairs) schedule(static)
     for (long i = 0; i < long(n_); ++i) pairs += pairs_[i];
     interactions_ += pairs;
+  }
+
+  // The fluid-fluid sums of every particle (acceleration, density rate, velocity gradient, viscous step
+  // limit, pair count; the shifting's sums with `shift_sums`) into a_, drho_, gradv_, visc_dt_, pairs_,
+  // gradc_ and divr_, each pair evaluated once for both particles: particle a takes the particles b after it
+  // in cell order. Slabs of cells along the grid's longest axis, slab_w_ wide, hold particles whose
+  // neighbours lie in the same slab or the next either side, so every third slab is summed at once.
+  void fluid_pairs(const std::vector<T>* X, const std::vector<T>* V, const std::vector<T>& R, bool shift_sums,
+                   bool sps) {
+    const sph::Params<T> P = P_;
+    sph::parallel_for(n_, [&](size_t i) {
+      for (int d = 0; d < D; ++d) a_[d][i] = T(0);
+      drho_[i] = visc_dt_[i] = T(0);
+      pairs_[i] = 0;
+      if (sps)
+        for (auto& g : gradv_) g[i] = T(0);
+      if (shift_sums) {
+        for (int d = 0; d < D; ++d) gradc_[d][i] = T(0);
+        divr_[i] = T(0);
+      }
+    });
+    // Adds one side's sums to particle i's.
+    auto add = [&](size_t i, const Accum<D, T>& S) {
+      for (int d = 0; d < D; ++d) a_[d][i] += S.acc[d];
+      drho_[i] += S.drho;
+      visc_dt_[i] = S.visc_dt > visc_dt_[i] ? S.visc_dt : visc_dt_[i];
+      pairs_[i] += S.pairs;
+      if (sps)
+        for (int k = 0; k < D * D; ++k) gradv_[k][i] += S.gradv[k];
+      if (shift_sums) {
+        for (int d = 0; d < D; ++d) gradc_[d][i] += S.gradc[d];
+        divr_[i] += S.divr;
+      }
+    };
+    auto pairs_after = [&](uint32_t a) {
+      T xa[D], va[D], tau_a[kS];
+      for (int d = 0; d < D; ++d) {
+        xa[d] = X[d][a];
+        va[d] = V[d][a];
+      }
+      for (int k = 0; k < kS; ++k) tau_a[k] = tau_[k][a];
+      const T rho_a = R[a], ira = irf_[a], p_a = pf_[a], m_a = mass_[a], k_a = kf_[a];
+      Accum<D, T> A;
+      for_pairs(
+          fluid_list_, X, V, xa, va,
+          [&](uint32_t b, const T* rab, T r2, const T* vab, T F) {
+            T tau_b[kS];
+            for (int k = 0; k < kS; ++k) tau_b[k] = tau_[k][b];
+            Accum<D, T> Bs;
+            sph::pair_common<D, T>(P, rab, r2, F, vab, rho_a, ira, p_a, R[b], irf_[b], pf_[b], mass_[b], A, m_a,
+                                   &Bs);
+            sph::pair_fluid_extras<D, T>(P, rab, r2, F, vab, rho_a, k_a, R[b], irf_[b], mass_[b], tau_a, tau_b, A,
+                                         kf_[b], m_a, ira, &Bs);
+            if (shift_sums) sph::pair_shift<D, T>(rab, r2, F, mass_[b] * irf_[b], A, m_a * ira, &Bs);
+            add(b, Bs);
+          },
+          a + 1);
+      add(a, A);
+    };
+    const int slabs = (grid_.n[slab_axis_] + slab_w_ - 1) / slab_w_;
+    sph::coloured_for(slabs, 3, [&](int s) {
+      sph::for_each_slab_range<D>(grid_, fluid_list_, slab_axis_, slab_w_, s, [&](uint32_t i0, uint32_t i1) {
+        for (uint32_t a = i0; a < i1; ++a) pairs_after(a);
+      });
+    });
+  }
+
+  // Particle i's fluid-fluid sums as fluid_pairs left them.
+  Accum<D, T> fluid_sums(size_t i, bool shift_sums, bool sps) const {
+    Accum<D, T> A;
+    for (int d = 0; d < D; ++d) A.acc[d] = a_[d][i];
+    A.drho = drho_[i];
+    A.visc_dt = visc_dt_[i];
+    A.pairs = pairs_[i];
+    if (sps)
+      for (int k = 0; k < D * D; ++k) A.gradv[k] = gradv_[k][i];
+    if (shift_sums) {
+      for (int d = 0; d < D; ++d) A.gradc[d] = gradc_[d][i];
+      A.divr = divr_[i];
+    }
+    return A;
   }
 
   // mDBC: the density of boundary particle k (positions XK, ghost vectors GK) from the water (at X, with the
@@ -828,13 +922,14 @@ class SphSolver final : public Simulation {
   }
 
   // Calls body(b, r_ab, r^2, v_ab, F) for every particle b of `list` (positions X, velocities V) within the
-  // kernel's support of the point xa moving at va, F the kernel gradient's factor. A particle at xa itself
-  // (the particle whose neighbours these are) is left out: its terms are all zero.
+  // kernel's support of the point xa moving at va, F the kernel gradient's factor; with `first`, only the
+  // particles from that one on in cell order. A particle at xa itself (the particle whose neighbours these
+  // are) is left out: its terms are all zero.
   template <class Body>
   void for_pairs(const sph::CellList& list, const std::vector<T>* X, const std::vector<T>* V, const T* xa,
-                 const T* va, const Body& body) const {
+                 const T* va, const Body& body, uint32_t first = 0) const {
     sph::for_each_neighbour_range<D>(grid_, list, xa, search_, [&](uint32_t b0, uint32_t b1) {
-      for (uint32_t b = b0; b < b1; ++b) {
+      for (uint32_t b = std::max(b0, first); b < b1; ++b) {
         T rab[D], r2 = 0;
         for (int d = 0; d < D; ++d) {
           rab[d] = xa[d] - X[d][b];
@@ -929,13 +1024,15 @@ class SphSolver final : public Simulation {
   double spacing_ = 0, h_ = 0, search_ = 0, g_norm_ = 0;
   sph::CellGrid<D> grid_;
   sph::CellList fluid_list_, wall_list_;
+  int slab_axis_ = 0, slab_w_ = 1;  // fluid_pairs' slabs of cells
 
   // Fluid: state at t, the predictor's state at t + dt/2, the rates of the last evaluation.
   size_t n_ = 0;
   std::vector<T> x_[D], v_[D], rho_, mass_, vol_, held_;
   std::vector<T> tag_, strain_;  // inflow only: buffer (1) or free water (0); the strain the boundary sets
   std::vector<T> xh_[D], vh_[D], rhoh_;
-  std::vector<T> a_[D], drho_, pf_, irf_, visc_dt_;  // pressure and 1/rho of the state last evaluated
+  std::vector<T> a_[D], drho_, pf_, irf_, kf_, visc_dt_;  // pressure, 1/rho, d rho / d p of the state last evaluated
+  std::vector<T> gradv_[D * D];                           // the fluid-fluid pairs' velocity gradient
   std::vector<int> pairs_;
   std::vector<T> tau_[kS], tau_next_[kS];  // sub-particle stress over rho^2, from the previous evaluation
   std::vector<T> gradc_[D], divr_;         // the shifting's sums at the last mid-step (shifting only)
