@@ -291,6 +291,38 @@ FLUME_HD T hydrostatic_strain(const T* x, const T* slope) {
   return e;
 }
 
+// Bed stress by the wall law, for a rough channel bed (a half-space's roughness_m): tau = rho C_f |u_t| u_t on
+// the velocity u_t along the bed at height z, with the log law's C_f = (kappa / ln(z / z0))^2 over a fully
+// rough wall, z0 = k_s / 30 (Nikuradse). The node on the bed carries the water of the cell layer above it
+// (its stencil reaches 1.5 cells), so z = dx / 2; below z = e^2 z0 the velocity lies within the roughness,
+// where the law does not hold, and C_f stops growing. Coulomb friction (`friction`) scales with the weight and
+// holds still water back; this stress is zero at rest and grows as u^2, as a channel's roughness acts
+// (Soares-Frazao & Zech's dam break: docs/validation.md, section 6).
+constexpr double kKarman = 0.41;
+inline double bed_drag_coefficient(double roughness, double dx) {
+  if (!(roughness > 0)) return 0;
+  const double log_ratio = std::log(0.5 * dx / (roughness / 30.0));
+  const double k = kKarman / (log_ratio > 2.0 ? log_ratio : 2.0);
+  return k * k;
+}
+// The stress on a node of mass m on a bed of normal n moving at vb, for a step dt, implicit in the speed so it
+// can only slow the node: u_t <- u_t / (1 + k |u_t| dt / m), k = rho C_f times the node's bed area (dx^(D-1)).
+template <int D, typename T>
+FLUME_HD void bed_stress(T* v, const T* n, const T* vb, T k, T m, T dt) {
+  if (!(m > T(0))) return;
+  T u[D], un = 0, ut2 = 0;
+  for (int a = 0; a < D; ++a) {
+    u[a] = v[a] - vb[a];
+    un += u[a] * n[a];
+  }
+  for (int a = 0; a < D; ++a) {
+    u[a] -= un * n[a];
+    ut2 += u[a] * u[a];
+  }
+  const T slow = T(1) / (T(1) + k * std::sqrt(ut2) * dt / m);
+  for (int a = 0; a < D; ++a) v[a] -= (T(1) - slow) * u[a];
+}
+
 // Boundary projection of a grid-node velocity (paper eq. 2). n is the outward normal of the solid (into
 // the fluid), vb the boundary's velocity. Separate: only motion into the solid is removed, and the
 // tangential slip is reduced by Coulomb friction mu |v_n| (Hu et al. 2018's separable friction).

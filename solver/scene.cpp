@@ -524,6 +524,13 @@ Scene parse(const json& root_json, const std::string& file) {
                                                  {"separate", BoundaryCondition::kSeparate},
                                                  {"symmetry", BoundaryCondition::kSymmetry}});
       b.friction = r.number("friction");
+      b.roughness = r.number("roughness_m");
+      if (b.roughness > 0 && b.condition == BoundaryCondition::kSymmetry)
+        r.fail("roughness_m", "a symmetry plane has no roughness (must be 0)");
+      if (b.roughness > 0 && b.condition == BoundaryCondition::kSticky)
+        r.fail("roughness_m", "a sticky wall already holds the water (must be 0)");
+      if (b.roughness > 0 && b.shape.type != ShapeType::kHalfSpace)
+        r.fail("roughness_m", "is a bed's: only a half_space takes it (must be 0 on a box)");
       b.velocity = r.vec("velocity", dim, Vec3d{});
       // Axes across which a box's faces act below a cell (mpm::subcell_cover), e.g. the gate's opening: [0..dim).
       if (r.has("subcell_axes")) {

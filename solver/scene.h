@@ -33,6 +33,7 @@ struct Boundary {
   Shape shape;
   BoundaryCondition condition = BoundaryCondition::kSeparate;
   double friction = 0.0;  // Coulomb coefficient for `separate`
+  double roughness = 0.0;  // m, equivalent sand roughness k_s of a bed stress by the wall law (0: none)
   Vec3d velocity{};       // boundary velocity v_b of eq. 2
   unsigned subcell_axes = 0;  // a box: the axes across which its faces act below a cell (mpm::subcell_cover)
 };

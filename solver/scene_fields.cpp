@@ -136,6 +136,12 @@ const ObjectDoc& boundary_doc() {
                   "or midway, one per scene)")
            .def("separate"),
        number("friction", "Coulomb friction coefficient of a separate boundary").in(0, 10).def(0.0),
+       number("roughness_m",
+              "equivalent sand roughness k_s of a bed stress by the wall law (a rough channel bed; MPM only; "
+              "Manning's n = k_s^(1/6) / 21.1); 0: none")
+           .in_unit("m")
+           .in(0, 0.1)
+           .def(0.0),
        vector("velocity", 2, 3, "the boundary's velocity (eq. 2)").in_unit("m/s").def_note("zero"),
        value("subcell_axes",
              {{"type", "array"}, {"items", {{"type", "integer"}, {"minimum", 0}, {"maximum", 2}}}},

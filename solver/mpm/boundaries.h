@@ -1,6 +1,7 @@
 // The scene's boundaries as the node update reads them (mpm::Wall, mpm::Container, mpm::SymmetryPlane), set
 // up once per run for both backends. Host code.
 #pragma once
+#include <cmath>
 #include <vector>
 
 #include "solver/mpm/node_k.h"
@@ -25,6 +26,8 @@ std::vector<Wall<D, T>> scene_walls(const Scene& scene) {
     w.bc = static_cast<Bc>(static_cast<int>(b.condition));
     w.mu = T(b.friction);
     w.subcell_axes = b.subcell_axes;
+    w.bed_k = T(scene.fluid.density * bed_drag_coefficient(b.roughness, scene.solver.dx) *
+                std::pow(scene.solver.dx, D - 1));
     walls.push_back(w);
   }
   return walls;

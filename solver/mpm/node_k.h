@@ -32,6 +32,7 @@ struct Wall {
   Bc bc = Bc::kSeparate;
   T mu = 0;
   unsigned subcell_axes = 0;  // mpm::subcell_cover
+  T bed_k = 0;                // a half-space's bed stress: rho C_f dx^(D-1) (mpm::bed_stress); 0: none
 };
 
 // The domain box: a container whose faces hold the nodes on or beyond them.
@@ -53,6 +54,15 @@ struct GhostSearch {
   int wall = -1;
   FLUME_HD bool found() const { return axes && !ambiguous; }
 };
+
+// Whether the node at xn is the bed's own row of a half-space (point p, normal n): inside it by less than half a
+// cell. Deeper rows are ghost nodes (mpm::ghost_half_space), whose velocity the mirror's exchange sets.
+template <int D>
+FLUME_HD bool on_bed(const double* xn, const double* p, const double* n, double dx) {
+  double depth = 0;
+  for (int d = 0; d < D; ++d) depth += (p[d] - xn[d]) * n[d];
+  return depth > -kTieCells * dx && depth < kGhostDepth * dx;
+}
 
 // The boundaries acting on the node at xn (double, m) with mass m and velocity v (after gravity): each scene
 // wall in `ids[0..count)` (null ids: walls 0..count-1) projects v through its faces or, where the node lies
@@ -95,6 +105,11 @@ FLUME_HD bool apply_boundaries(const double* xn, T m, T* v, T dt, double load_we
       apply_box_wall<D>(v, xn, w.a, w.b, dx, n, faces, w.vb, w.bc, w.mu, subcell_rate0, dt);
     else
       apply_wall<D>(v, n, faces, w.vb, w.bc, w.mu);
+    if (w.bed_k > T(0) && !w.box && on_bed<D>(xn, w.a, w.b, dx)) {
+      T nb[D];
+      for (int d = 0; d < D; ++d) nb[d] = T(w.b[d]);
+      bed_stress<D>(v, nb, w.vb, w.bed_k, m, dt);
+    }
     if (impulse)
       for (int d = 0; d < D; ++d)
         accumulate(&impulse[k * D + d], load_weight * double(m) * (before[d] - v[d]));

@@ -364,6 +364,10 @@ class SphSolver final : public Simulation {
   }
 
   void seed_fluid() {
+    for (size_t k = 0; k < scene_.boundaries.size(); ++k)
+      if (scene_.boundaries[k].roughness > 0)
+        throw InputError(scene_.file, "boundaries." + std::to_string(k) + ".roughness_m",
+                         "SPH has no bed stress: set it to 0 or run with solver.method mpm");
     const Seeds seeds = seed_water<D>(scene_, spacing_, displaced_by<D>(debris_.get()));
     n_ = seeds.size();
     if (n_ == 0) throw InputError(scene_.file, "water", "no water to simulate");
