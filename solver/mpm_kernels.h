@@ -291,12 +291,12 @@ FLUME_HD T hydrostatic_strain(const T* x, const T* slope) {
   return e;
 }
 
-// Bed stress by the wall law, for a rough channel bed (a half-space's roughness_m): tau = rho C_f |u_t| u_t on
-// the velocity u_t along the bed at height z, with the log law's C_f = (kappa / ln(z / z0))^2 over a fully
+// Bed stress by the wall law, for a rough channel bed (a half-space's roughness_m): tau = rho C_f |u_t| u_t
+// on the velocity u_t along the bed at height z, with the log law's C_f = (kappa / ln(z / z0))^2 over a fully
 // rough wall, z0 = k_s / 30 (Nikuradse). The node on the bed carries the water of the cell layer above it
 // (its stencil reaches 1.5 cells), so z = dx / 2; below z = e^2 z0 the velocity lies within the roughness,
-// where the law does not hold, and C_f stops growing. Coulomb friction (`friction`) scales with the weight and
-// holds still water back; this stress is zero at rest and grows as u^2, as a channel's roughness acts
+// where the law does not hold, and C_f stops growing. Coulomb friction (`friction`) scales with the weight
+// and holds still water back; this stress is zero at rest and grows as u^2, as a channel's roughness acts
 // (Soares-Frazao & Zech's dam break: docs/validation.md, section 6).
 constexpr double kKarman = 0.41;
 inline double bed_drag_coefficient(double roughness, double dx) {
@@ -305,8 +305,9 @@ inline double bed_drag_coefficient(double roughness, double dx) {
   const double k = kKarman / (log_ratio > 2.0 ? log_ratio : 2.0);
   return k * k;
 }
-// The stress on a node of mass m on a bed of normal n moving at vb, for a step dt, implicit in the speed so it
-// can only slow the node: u_t <- u_t / (1 + k |u_t| dt / m), k = rho C_f times the node's bed area (dx^(D-1)).
+// The stress on a node of mass m on a bed of normal n moving at vb, for a step dt, implicit in the speed so
+// it can only slow the node: u_t <- u_t / (1 + k |u_t| dt / m), k = rho C_f times the node's bed area
+// (dx^(D-1)).
 template <int D, typename T>
 FLUME_HD void bed_stress(T* v, const T* n, const T* vb, T k, T m, T dt) {
   if (!(m > T(0))) return;

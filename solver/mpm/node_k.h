@@ -55,8 +55,9 @@ struct GhostSearch {
   FLUME_HD bool found() const { return axes && !ambiguous; }
 };
 
-// Whether the node at xn is the bed's own row of a half-space (point p, normal n): inside it by less than half a
-// cell. Deeper rows are ghost nodes (mpm::ghost_half_space), whose velocity the mirror's exchange sets.
+// Whether the node at xn is the bed's own row of a half-space (point p, normal n): inside it by less than
+// half a cell. Deeper rows are ghost nodes (mpm::ghost_half_space), whose velocity the mirror's exchange
+// sets.
 template <int D>
 FLUME_HD bool on_bed(const double* xn, const double* p, const double* n, double dx) {
   double depth = 0;

@@ -108,7 +108,8 @@ inline void for_each_neighbour_range(const CellGrid<D>& g, const CellList& list,
 // Calls f(begin, end) for the contiguous ranges of `list`'s particles in slab s: the cells whose coordinate
 // along `axis` lies in [s w, (s + 1) w), row by row in cell order.
 template <int D, class F>
-inline void for_each_slab_range(const CellGrid<D>& g, const CellList& list, int axis, int w, int s, const F& f) {
+inline void for_each_slab_range(const CellGrid<D>& g, const CellList& list, int axis, int w, int s,
+                                const F& f) {
   const int c0 = s * w, c1 = std::min(g.n[axis], c0 + w);  // the slab's cells along the axis: [c0, c1)
   if (c0 >= c1) return;
   const int x0 = axis == 0 ? c0 : 0, x1 = axis == 0 ? c1 : g.n[0];

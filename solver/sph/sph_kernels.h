@@ -190,7 +190,8 @@ FLUME_HD void sps_stress(const Params<T>& P, const T* gradv, T rho, T* tau) {
 // div r is below the threshold (the surface layer) is not shifted, and one between it and D is shifted by
 // the fraction (div r - tfs) / (D - tfs). Pair sums:
 template <int D, typename T>
-FLUME_HD void pair_shift(const T* rab, T r2, T F, T V_b, Accum<D, T>& A, T V_a = T(0), Accum<D, T>* B = nullptr) {
+FLUME_HD void pair_shift(const T* rab, T r2, T F, T V_b, Accum<D, T>& A, T V_a = T(0),
+                         Accum<D, T>* B = nullptr) {
   const T vf = V_b * F;
   for (int d = 0; d < D; ++d) A.gradc[d] += vf * rab[d];
   A.divr -= vf * r2;

@@ -13,9 +13,9 @@ void parallel_for(std::size_t n, const Body& body) {
 }
 
 // body(s) for s < n in `colours` rounds, s = c, c + colours, ... in round c: the calls of one round run at
-// once, the rounds one after the other. For a scatter whose writes from item s reach only items s - 1 .. s + 1
-// (slabs of cells, each wider than the kernel's reach): items three apart never write the same place, and each
-// item's sums arrive in one order whatever the number of threads.
+// once, the rounds one after the other. For a scatter whose writes from item s reach only items s - 1 .. s +
+// 1 (slabs of cells, each wider than the kernel's reach): items three apart never write the same place, and
+// each item's sums arrive in one order whatever the number of threads.
 template <class Body>
 void coloured_for(int n, int colours, const Body& body) {
   for (int c = 0; c < colours; ++c) {

@@ -471,7 +471,8 @@ class SphSolver final : public Simulation {
       throw InputError(scene_.file, "solver.dx",
                        "the SPH cell grid over the domain would exceed 2^31 cells: use a larger dx");
     // Slabs for the pair-once scatter (fluid_pairs): across the grid's longest axis, each as wide as the
-    // largest cell distance between two particles within 2h of each other, each having drifted since its sort.
+    // largest cell distance between two particles within 2h of each other, each having drifted since its
+    // sort.
     slab_axis_ = 0;
     for (int d = 1; d < D; ++d)
       if (grid_.n[d] > grid_.n[slab_axis_]) slab_axis_ = d;
@@ -693,8 +694,8 @@ class SphSolver final : public Simulation {
             sph::pair_common<D, T>(Q, rab, r2, F, vab, rho_a, ira, p_a, R[b], irf_[b], pf_[b], mass_[b], A);
             T tau_b[kS];
             for (int k = 0; k < kS; ++k) tau_b[k] = tau_[k][b];
-            sph::pair_fluid_extras<D, T>(Q, rab, r2, F, vab, rho_a, kf_[a], R[b], irf_[b], mass_[b], tau, tau_b,
-                                         A);
+            sph::pair_fluid_extras<D, T>(Q, rab, r2, F, vab, rho_a, kf_[a], R[b], irf_[b], mass_[b], tau,
+                                         tau_b, A);
             if (shift_sums) sph::pair_shift<D, T>(rab, r2, F, mass_[b] * irf_[b], A);
           });
         for_pairs(wall_list_, xw_, vw_, x, v, [&](uint32_t b, const T* rab, T r2, const T* vab, T F) {
@@ -823,10 +824,10 @@ class SphSolver final : public Simulation {
             T tau_b[kS];
             for (int k = 0; k < kS; ++k) tau_b[k] = tau_[k][b];
             Accum<D, T> Bs;
-            sph::pair_common<D, T>(P, rab, r2, F, vab, rho_a, ira, p_a, R[b], irf_[b], pf_[b], mass_[b], A, m_a,
-                                   &Bs);
-            sph::pair_fluid_extras<D, T>(P, rab, r2, F, vab, rho_a, k_a, R[b], irf_[b], mass_[b], tau_a, tau_b, A,
-                                         kf_[b], m_a, ira, &Bs);
+            sph::pair_common<D, T>(P, rab, r2, F, vab, rho_a, ira, p_a, R[b], irf_[b], pf_[b], mass_[b], A,
+                                   m_a, &Bs);
+            sph::pair_fluid_extras<D, T>(P, rab, r2, F, vab, rho_a, k_a, R[b], irf_[b], mass_[b], tau_a,
+                                         tau_b, A, kf_[b], m_a, ira, &Bs);
             if (shift_sums) sph::pair_shift<D, T>(rab, r2, F, mass_[b] * irf_[b], A, m_a * ira, &Bs);
             add(b, Bs);
           },
@@ -1035,8 +1036,9 @@ class SphSolver final : public Simulation {
   std::vector<T> x_[D], v_[D], rho_, mass_, vol_, held_;
   std::vector<T> tag_, strain_;  // inflow only: buffer (1) or free water (0); the strain the boundary sets
   std::vector<T> xh_[D], vh_[D], rhoh_;
-  std::vector<T> a_[D], drho_, pf_, irf_, kf_, visc_dt_;  // pressure, 1/rho, d rho / d p of the state last evaluated
-  std::vector<T> gradv_[D * D];                           // the fluid-fluid pairs' velocity gradient
+  std::vector<T> a_[D], drho_, pf_, irf_, kf_,
+      visc_dt_;                  // pressure, 1/rho, d rho / d p of the state last evaluated
+  std::vector<T> gradv_[D * D];  // the fluid-fluid pairs' velocity gradient
   std::vector<int> pairs_;
   std::vector<T> tau_[kS], tau_next_[kS];  // sub-particle stress over rho^2, from the previous evaluation
   std::vector<T> gradc_[D], divr_;         // the shifting's sums at the last mid-step (shifting only)

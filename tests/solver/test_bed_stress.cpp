@@ -4,9 +4,9 @@
 // rho C_f u_b^2 per unit of bed the drag acts on, so after t it is rho C_f u_b^2 L t (per metre of width in
 // 2D). The drag acts on the bed's row of nodes, dx of bed each, wherever the stencil (1.5 cells) reaches
 // water: L is the slab's length and 1.5 cells beyond each end. It can only be less by the speed the bed layer
-// picks up: at least half a cell of water above each bed node takes the stress, so u <= C_f u_b^2 t / (dx / 2)
-// and the stress falls by at most 2 u / u_b. A smooth floor (roughness 0) sliding under the same water does
-// no work on it.
+// picks up: at least half a cell of water above each bed node takes the stress, so u <= C_f u_b^2 t / (dx /
+// 2) and the stress falls by at most 2 u / u_b. A smooth floor (roughness 0) sliding under the same water
+// does no work on it.
 #include <gtest/gtest.h>
 
 #include <cmath>
