@@ -1333,6 +1333,8 @@ class MpmCuda final : public Simulation, private mpm::SceneConstants<D, T> {
 };
 
 std::unique_ptr<Simulation> make(const Scene& scene, const SimulationOptions& options) {
+  if (scene.solver.flip > 0)
+    throw InputError(scene.file, "solver.flip", "the CUDA backend transfers by APIC only (must be 0; the CPU runs FLIP)");
   const bool f = scene.solver.precision == Precision::kFloat;
   if (scene.dimension == 2) {
     if (f) return std::make_unique<MpmCuda<2, float>>(scene, options);

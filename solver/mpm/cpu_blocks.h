@@ -53,8 +53,9 @@ class BlockGrid {
 
 template <int D, typename T>
 struct GridNodes {
-  std::vector<T> m, v[D], e,
-      fill;  // e: mass-weighted strain J - 1 over mass; fill: particle volume per cell volume
+  std::vector<T> m, v[D], vold[D], e,
+      fill;  // e: mass-weighted strain J - 1 over mass; fill: particle volume per cell volume; vold: FLIP's
+             // old velocity (2D only; empty in 3D)
   std::vector<uint8_t> wall;  // 1 where a wall or a box set the node's velocity
   void resize(size_t nodes) {
     m.resize(nodes);
@@ -62,15 +63,19 @@ struct GridNodes {
     fill.resize(nodes);
     wall.resize(nodes);
     for (int d = 0; d < D; ++d) v[d].resize(nodes);
+    if constexpr (D == 2)
+      for (int d = 0; d < D; ++d) vold[d].resize(nodes);
   }
   void clear(size_t i) {  // a node without water
     m[i] = e[i] = fill[i] = T(0);
     wall[i] = 0;
     for (int d = 0; d < D; ++d) v[d][i] = T(0);
+    if constexpr (D == 2)
+      for (int d = 0; d < D; ++d) vold[d][i] = T(0);
   }
   size_t bytes() const {  // the value arrays (the wall flags are not counted)
     size_t b = (m.capacity() + e.capacity() + fill.capacity()) * sizeof(T);
-    for (int d = 0; d < D; ++d) b += v[d].capacity() * sizeof(T);
+    for (int d = 0; d < D; ++d) b += (v[d].capacity() + vold[d].capacity()) * sizeof(T);
     return b;
   }
 };

@@ -47,6 +47,8 @@ void MpmSolver<D, T>::mirror_beyond_symmetry() {
     grid_.fill[idx] = grid_.fill[mi];
     grid_.wall[idx] = grid_.wall[mi];
     for (int d = 0; d < D; ++d) grid_.v[d][idx] = T(symmetry_channel_sign(sym_, 1 + d)) * grid_.v[d][mi];
+    if constexpr (kFlipChannels > 0)
+      for (int d = 0; d < D; ++d) grid_.vold[d][idx] = T(symmetry_channel_sign(sym_, 1 + d)) * grid_.vold[d][mi];
   }
 }
 

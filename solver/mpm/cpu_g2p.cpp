@@ -31,6 +31,7 @@ void MpmSolver<D, T>::g2p(T dt) {
   // of type T, which the compiler would then reload (and the Tait law's set-up redo) for every particle.
   const mpm::TaitLaw<T> law = law_;
   const T inv_dx = inv_dx_;
+  const T flip = flip_;
   mpm::G2pConstants<D, T> g2p_k;
   g2p_k.dt = dt;
   g2p_k.psi = psi_;
@@ -91,6 +92,8 @@ void MpmSolver<D, T>::g2p(T dt) {
         t[D + 1] = free * grid_.fill[idx];
         t[D + 2] = free;
         for (int c = D + 3; c < kLanes; ++c) t[c] = T(0);
+        if constexpr (kFlipChannels > 0)
+          for (int d = 0; d < D; ++d) t[D + 3 + d] = grid_.vold[d][idx];
       };
       mpm::for_each_box_row<D>(tile_box_[p], [&](int a, int len) {
         for (int k = 0; k < len; ++k) fetch(a + k);
@@ -166,6 +169,9 @@ void MpmSolver<D, T>::g2p(T dt) {
             for (int a = 0; a < D; ++a) bC[a * D + b][j] = Cb[a];
           }
           for (int a = 0; a < D; ++a) bv[a][j] = S[a];
+          if constexpr (kFlipChannels > 0)
+            if (flip > T(0))
+              for (int a = 0; a < D; ++a) bv[a][j] = mpm::flip_velocity(S[a], v_[a][b0 + j], S[D + 3 + a], flip);
           bJg[j] = S[D];
           bFg[j] = S[D + 1];
           bws[j] = S[D + 2];

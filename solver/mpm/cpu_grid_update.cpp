@@ -52,6 +52,8 @@ void MpmSolver<D, T>::update_node(const Lane& acc, long g, size_t idx, const int
   grid_.fill[idx] = acc[2 + D] * inv_cell_volume;
   grid_.wall[idx] = on_wall;
   for (int d = 0; d < D; ++d) grid_.v[d][idx] = v[d];
+  if constexpr (kFlipChannels > 0)
+    for (int d = 0; d < D; ++d) grid_.vold[d][idx] = acc[D + 3 + d] / m;
 }
 
 // Gathers the tiles into the grid blocks, then turns momentum into velocity, adds gravity and applies the
@@ -133,7 +135,8 @@ void MpmSolver<D, T>::grid_update(T dt) {
       // plane take their fold (what the whole would give them) and are updated; a load on the plane is half
       // the whole's. Each reads its own entry and its mirror's beyond the plane, which nobody writes.
       Lane sign;
-      for (int c = 0; c < kLanes; ++c) sign[c] = T(mpm::symmetry_channel_sign(sym_, c));
+      for (int c = 0; c < kLanes; ++c)  // the transfer's momentum (from lane D + 3) reflects as the momentum
+        sign[c] = T(mpm::symmetry_channel_sign(sym_, c >= D + 3 && c < kChannels ? c - (D + 2) : c));
       const long nq = static_cast<long>(zone_.entries());
 #pragma omp for schedule(static)
       for (long q = 0; q < nq; ++q) {

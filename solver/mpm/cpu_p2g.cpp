@@ -66,6 +66,7 @@ void MpmSolver<D, T>::p2g(T dt) {
       for (uint32_t b0 = blocks_.pstart[p]; b0 < blocks_.pstart[p + 1]; b0 += kBatch) {
         const int nb = static_cast<int>(std::min<uint32_t>(kBatch, blocks_.pstart[p + 1] - b0));
         alignas(64) T bw[D][3][kBatch], bat0[kChannels][kBatch], bslope[D][D][kBatch], bp[kBatch];
+        alignas(64) T bslope_t[kFlipChannels > 0 ? D : 1][D][kBatch];  // the transfer's: m C dx
         alignas(64) int brel[D][kBatch];
         const T *bx[D], *bv[D], *bC[D * D], *be = es + b0, *bvol = vols + b0;  // the batch's particles
         for (int d = 0; d < D; ++d) {
@@ -107,6 +108,14 @@ void MpmSolver<D, T>::p2g(T dt) {
             for (int b = 0; b < D; ++b) bslope[b][a][j] = A[a * D + b] * dx;
           }
           bat0[0][j] = m;
+          if constexpr (kFlipChannels > 0) {
+            T tmom0[D];
+            mpm::p2g_transfer_momentum<D>(m, vp, Cp, f, dx, tmom0);
+            for (int a = 0; a < D; ++a) {
+              bat0[D + 3 + a][j] = tmom0[a];
+              for (int b = 0; b < D; ++b) bslope_t[b][a][j] = m * Cp[a * D + b] * dx;
+            }
+          }
           bat0[1 + D][j] = strain;
           bat0[2 + D][j] = volume;
         }
@@ -121,6 +130,8 @@ void MpmSolver<D, T>::p2g(T dt) {
           for (int b = 0; b < D; ++b) {
             slope[b] = bslope[b][0][j] * unit[1];
             for (int a = 1; a < D; ++a) slope[b] += bslope[b][a][j] * unit[1 + a];
+            if constexpr (kFlipChannels > 0)
+              for (int a = 0; a < D; ++a) slope[b] += bslope_t[b][a][j] * unit[D + 3 + a];
           }
           if constexpr (D == 2) {
 #pragma GCC unroll 3
