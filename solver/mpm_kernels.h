@@ -579,8 +579,12 @@ FLUME_HD int symmetry_side(const SymmetryPlane& s, int i) {
   return (r > 0) == (s.sign > 0) ? -1 : 1;
 }
 
-// The sign that reflection gives grid channel c (mass, momentum D, strain, volume): -1 for the normal momentum.
-FLUME_HD int symmetry_channel_sign(const SymmetryPlane& s, int c) { return c == 1 + s.axis ? -1 : 1; }
+// The sign that reflection gives grid channel c (mass, momentum D, strain, volume, then with FLIP the
+// transfer's momentum D): -1 for the normal momentum, in either place.
+template <int D>
+FLUME_HD int symmetry_channel_sign(const SymmetryPlane& s, int c) {
+  return c == 1 + s.axis || c == D + 3 + s.axis ? -1 : 1;
+}
 
 // Whether a particle at coordinate xa along the plane's axis lies beyond the plane.
 template <typename T>

@@ -473,8 +473,6 @@ Scene parse(const json& root_json, const std::string& file) {
     s.flip = r.number("flip");
     if (s.flip > 0 && s.method == SolverMethod::kSph)
       r.fail("flip", "is MPM's transfer; SPH has none (must be 0 with solver.method sph)");
-    if (s.flip > 0 && dim == 3)
-      r.fail("flip", "is 2D only so far: a 3D node would need 9 channels in the scatter, which holds 8 (must be 0)");
     s.precision = r.choice<Precision>("precision",
                                       {{"float", Precision::kFloat}, {"double", Precision::kDouble}});
     s.end_time = r.number("end_time");

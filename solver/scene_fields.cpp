@@ -45,12 +45,13 @@ const ObjectDoc& solver_doc() {
            .in(1, 2000000000)
            .def(100000000),
        number("cfl", "CFL number of the adaptive time step").above(0).at_most(10).def(0.4),
-       number("flip", "MPM: share of each particle's own velocity kept through the step (FLIP), against APIC's")
+       number("flip",
+              "MPM: share of each particle's own velocity kept through the step (FLIP), against APIC's")
            .in(0, 0.99)
            .def(0.0)
            .note("0: APIC, whose every transfer damps what the grid cannot hold, so that the flow under the "
                  "sluice gate slows as the step shrinks (docs/solver.md, \"The transfer's loss per step\"); "
-                 "2D and the CPU only"),
+                 "the CPU backend only"),
        choice("precision", {"float", "double"}, "floating-point precision of the particles and grid")
            .def("double"),
        number("end_time", "simulated time at which the run ends")

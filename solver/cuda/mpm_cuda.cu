@@ -116,6 +116,9 @@ struct View {
   static constexpr int kNodes = mpm::Pow<D>::of(kBlock);
   static constexpr int kNbr = mpm::Pow<D>::of(3);
   static constexpr int kChannels = D + 3;  // mass, momentum (D), mass-weighted strain J - 1, particle volume
+  // With FLIP (solver.flip) also the transfer's momentum (D, mpm::p2g_transfer_momentum), divided by the mass
+  // in the update: the grid's old velocity.
+  static constexpr int kMaxChannels = 2 * D + 3;
 
   // particles
   T* x[D];
@@ -130,7 +133,9 @@ struct View {
   const uint64_t* pkeys;
   const int32_t* p_nbr;  // kNbr grid block indices per particle block
   const uint64_t* gkeys;
-  T* grid;  // kChannels x nodes, channel-major
+  T* grid;  // channels x nodes, channel-major
+  int channels;  // kChannels, or kMaxChannels with FLIP
+  T flip;        // mpm::flip_velocity's alpha
   uint8_t* gwall;
   int64_t* ghost_mirror;  // per node: its reflection's grid index (mpm::ghost_half_space), or -1
   uint8_t* ghost_axes;    // per node: the normal axes the reflection keeps
@@ -239,6 +244,9 @@ struct P2G {
     }
     mpm::p2g_particle<D>(s.law.pressure(s.e[i]), Cp, s.e[i], V, m, vp, f, xp, dx, s.mu, stress_scale,
                          s.strain_slope, A, mom0, mJ, vol);
+    const bool flip = s.channels > View<D, T>::kChannels;
+    T tmom0[D] = {};
+    if (flip) mpm::p2g_transfer_momentum<D>(m, vp, Cp, f, dx, tmom0);
     if (s.held) mom0[D - 1] += s.held[i] * lift * m;
     constexpr int kStencil = mpm::Pow<D>::of(3);
     for (int q = 0; q < kStencil; ++q) {
@@ -247,7 +255,7 @@ struct P2G {
       T wt = w[0][off[0]];
       for (int d = 1; d < D; ++d) wt *= w[d][off[d]];
       for (int d = 0; d < D; ++d) node[d] = base[d] + off[d];
-      T val[View<D, T>::kChannels];
+      T val[View<D, T>::kMaxChannels];
       val[0] = wt * m;
       for (int a = 0; a < D; ++a) {
         T mom = mom0[a];
@@ -256,6 +264,12 @@ struct P2G {
       }
       val[1 + D] = wt * mJ;
       val[2 + D] = wt * vol;
+      if (flip)
+        for (int a = 0; a < D; ++a) {
+          T mom = tmom0[a];
+          for (int b = 0; b < D; ++b) mom += m * Cp[a * D + b] * (T(off[b]) * dx);
+          val[D + 3 + a] = wt * mom;
+        }
       put(node, val);
     }
   }
@@ -294,18 +308,17 @@ struct BlockTile {
 template <int D, typename T>
 struct P2GTiled : BlockTile<D> {
   using Tile = BlockTile<D>;
-  static constexpr int kChannels = View<D, T>::kChannels;
   P2G<D, T> p2g;
-  FLUME_HD int tile_values() const { return Tile::kEntries * kChannels; }
+  FLUME_HD int tile_values() const { return Tile::kEntries * p2g.s.channels; }
   FLUME_HD void load(size_t, int v, T* tile) const {
-    for (int c = 0; c < kChannels; ++c) tile[c * Tile::kEntries + v] = T(0);
+    for (int c = 0; c < p2g.s.channels; ++c) tile[c * Tile::kEntries + v] = T(0);
   }
   FLUME_HD void item(size_t g, size_t i, T* tile) const {
     int blk[D], lo[D];
     this->corner(g, blk, lo);
     p2g.scatter(i, [&](const int* node, const T* val) {
       const int v = Tile::entry(node, lo);
-      for (int c = 0; c < kChannels; ++c) mpm::accumulate(&tile[c * Tile::kEntries + v], val[c]);
+      for (int c = 0; c < p2g.s.channels; ++c) mpm::accumulate(&tile[c * Tile::kEntries + v], val[c]);
     });
   }
   FLUME_HD void flush(size_t g, int v, const T* tile) const {
@@ -315,7 +328,7 @@ struct P2GTiled : BlockTile<D> {
     this->corner(g, blk, lo);
     Tile::entry_node(v, lo, node);
     const size_t idx = s.node_index(static_cast<int32_t>(g), blk, node);
-    for (int c = 0; c < kChannels; ++c) mpm::accumulate(&s.grid[c * s.nodes + idx], tile[c * Tile::kEntries + v]);
+    for (int c = 0; c < s.channels; ++c) mpm::accumulate(&s.grid[c * s.nodes + idx], tile[c * Tile::kEntries + v]);
   }
 };
 
@@ -339,13 +352,13 @@ struct SymmetryFold {
     const int64_t mi = s.symmetry_mirror(idx, side);
     if (side < 0 || !(s.grid[idx] > T(0))) return;
     if (side == 0) {
-      for (int c = 0; c < View<D, T>::kChannels; ++c)
-        s.grid[c * s.nodes + idx] += T(mpm::symmetry_channel_sign(s.sym, c)) * s.grid[c * s.nodes + idx];
+      for (int c = 0; c < s.channels; ++c)
+        s.grid[c * s.nodes + idx] += T(mpm::symmetry_channel_sign<D>(s.sym, c)) * s.grid[c * s.nodes + idx];
       return;
     }
     if (mi < 0) return;
-    for (int c = 0; c < View<D, T>::kChannels; ++c)
-      s.grid[c * s.nodes + mi] += T(mpm::symmetry_channel_sign(s.sym, c)) * s.grid[c * s.nodes + idx];
+    for (int c = 0; c < s.channels; ++c)
+      s.grid[c * s.nodes + mi] += T(mpm::symmetry_channel_sign<D>(s.sym, c)) * s.grid[c * s.nodes + idx];
   }
 };
 // After the walls and the ghosts: a node beyond the plane is the reflection of its mirror.
@@ -356,8 +369,8 @@ struct SymmetryMirror {
     int side;
     const int64_t mi = s.symmetry_mirror(idx, side);
     if (side <= 0) return;
-    for (int c = 0; c < View<D, T>::kChannels; ++c)
-      s.grid[c * s.nodes + idx] = mi < 0 ? T(0) : T(mpm::symmetry_channel_sign(s.sym, c)) * s.grid[c * s.nodes + mi];
+    for (int c = 0; c < s.channels; ++c)
+      s.grid[c * s.nodes + idx] = mi < 0 ? T(0) : T(mpm::symmetry_channel_sign<D>(s.sym, c)) * s.grid[c * s.nodes + mi];
     s.gwall[idx] = mi < 0 ? 0 : s.gwall[mi];
   }
 };
@@ -372,7 +385,7 @@ struct GridUpdate {
     for (int c = 0; c < mpm::kGhostPoolLanes * D; ++c) s.ghost_pool[c * s.nodes + idx] = T(0);
     const T m = s.grid[idx];
     if (m <= T(0)) {
-      for (int c = 0; c < View<D, T>::kChannels; ++c) s.grid[c * s.nodes + idx] = T(0);
+      for (int c = 0; c < s.channels; ++c) s.grid[c * s.nodes + idx] = T(0);
       s.gwall[idx] = 0;
       s.ghost_mirror[idx] = -1;
       return;
@@ -405,6 +418,7 @@ struct GridUpdate {
     }
     s.grid[(1 + D) * s.nodes + idx] /= m;
     s.grid[(2 + D) * s.nodes + idx] *= s.inv_cell_volume;  // the node's fill (mpm::fill_correction)
+    for (int c = View<D, T>::kChannels; c < s.channels; ++c) s.grid[c * s.nodes + idx] /= m;  // FLIP's old velocity
     s.gwall[idx] = on_wall ? 1 : 0;
     for (int d = 0; d < D; ++d) s.grid[(1 + d) * s.nodes + idx] = v[d];
   }
@@ -580,7 +594,7 @@ struct G2P {
   View<D, T> s;
   mpm::G2pConstants<D, T> g2p;
   // Particle i from its nodes' values: read(node, r) sets r to the node's velocity (D), mass-weighted strain,
-  // fill and wall flag, as GridUpdate left them.
+  // fill and wall flag, as GridUpdate left them, and with FLIP the old velocity (D).
   template <typename Read>
   FLUME_HD void update(size_t i, const Read& read) const {
     const T dx = s.dx;
@@ -592,7 +606,8 @@ struct G2P {
       base[d] = mpm::stencil_base(xg, f[d]);
       mpm::bspline_weights(f[d], w[d]);
     }
-    T vn[D] = {}, Cn[D * D] = {}, Jg = 0, Fg = 0, wsum = 0;
+    T vn[D] = {}, vo[D] = {}, Cn[D * D] = {}, Jg = 0, Fg = 0, wsum = 0;
+    const bool flip = s.channels > View<D, T>::kChannels;
     constexpr int kStencil = mpm::Pow<D>::of(3);
     for (int q = 0; q < kStencil; ++q) {
       int off[D], node[D];
@@ -604,8 +619,10 @@ struct G2P {
         node[d] = base[d] + off[d];
         dist[d] = (T(off[d]) - f[d]) * dx;
       }
-      T r[D + 3];
+      T r[2 * D + 3];
       read(node, r);
+      if (flip)
+        for (int a = 0; a < D; ++a) vo[a] += wt * r[D + 3 + a];
       T u[D];
       for (int a = 0; a < D; ++a) {
         u[a] = wt * r[a];
@@ -619,6 +636,8 @@ struct G2P {
       wsum += wj;
     }
     for (int k = 0; k < D * D; ++k) Cn[k] *= cscale;
+    if (flip)
+      for (int a = 0; a < D; ++a) vn[a] = mpm::flip_velocity(vn[a], s.v[a][i], vo[a], s.flip);
     T xp[D], e = s.e[i];
     for (int d = 0; d < D; ++d) xp[d] = s.x[d][i];
     s.fill_work[i] = mpm::g2p_particle<D>(g2p, Jg, Fg, wsum, s.vol[i], e, xp, vn, Cn);
@@ -636,9 +655,10 @@ struct G2P {
 template <int D, typename T>
 struct G2PTiled : BlockTile<D> {
   using Tile = BlockTile<D>;
-  static constexpr int kValues = D + 3;  // velocity, strain, fill, wall flag
   G2P<D, T> g2p;
-  FLUME_HD int tile_values() const { return Tile::kEntries * kValues; }
+  // Velocity, strain, fill, wall flag; with FLIP the old velocity.
+  FLUME_HD int values() const { return g2p.s.channels > View<D, T>::kChannels ? 2 * D + 3 : D + 3; }
+  FLUME_HD int tile_values() const { return Tile::kEntries * values(); }
   FLUME_HD void load(size_t g, int v, T* tile) const {
     const View<D, T>& s = g2p.s;
     int blk[D], lo[D], node[D];
@@ -649,13 +669,15 @@ struct G2PTiled : BlockTile<D> {
     tile[D * Tile::kEntries + v] = s.grid[(1 + D) * s.nodes + idx];
     tile[(D + 1) * Tile::kEntries + v] = s.grid[(2 + D) * s.nodes + idx];
     tile[(D + 2) * Tile::kEntries + v] = s.gwall[idx] ? T(1) : T(0);
+    for (int a = 0; D + 3 + a < values(); ++a)
+      tile[(D + 3 + a) * Tile::kEntries + v] = s.grid[(D + 3 + a) * s.nodes + idx];
   }
   FLUME_HD void item(size_t g, size_t i, T* tile) const {
     int blk[D], lo[D];
     this->corner(g, blk, lo);
     g2p.update(i, [&](const int* node, T* r) {
       const int v = Tile::entry(node, lo);
-      for (int k = 0; k < kValues; ++k) r[k] = tile[k * Tile::kEntries + v];
+      for (int k = 0; k < values(); ++k) r[k] = tile[k * Tile::kEntries + v];
     });
   }
   FLUME_HD void flush(size_t, int, const T*) const {}
@@ -763,14 +785,15 @@ template <int D, typename T>
 class MpmCuda final : public Simulation, private mpm::SceneConstants<D, T> {
   using V = View<D, T>;
   using K = mpm::SceneConstants<D, T>;  // the scene's constants, as the CPU's (constants.h)
-  using K::dx_, K::inv_dx_, K::grid_lo_, K::gravity_, K::mu_, K::psi_, K::law_, K::law_d_, K::strain_slope_, K::c_;
+  using K::dx_, K::inv_dx_, K::grid_lo_, K::gravity_, K::mu_, K::psi_, K::flip_, K::law_, K::law_d_, K::strain_slope_, K::c_;
   static constexpr int kNodes = V::kNodes;
   static constexpr int kNbr = V::kNbr;
-  static constexpr int kChannels = V::kChannels;
+  int channels_ = V::kChannels;  // V::kMaxChannels with FLIP
 
  public:
   MpmCuda(const Scene& scene, const SimulationOptions&)
       : mpm::SceneConstants<D, T>(scene), scene_(scene), instruments_(scene_) {
+    if (flip_ > T(0)) channels_ = V::kMaxChannels;
     if (scene.debris.present) {
       if constexpr (D != 3) throw InputError(scene.file, "debris", "debris need a 3D scene");
       debris_ = std::make_unique<DebrisCoupling>(scene_);
@@ -1006,6 +1029,8 @@ class MpmCuda final : public Simulation, private mpm::SceneConstants<D, T> {
     s.p_nbr = raw(p_nbr_);
     s.gkeys = raw(gkeys_);
     s.grid = raw(grid_);
+    s.channels = channels_;
+    s.flip = flip_;
     s.gwall = raw(gwall_);
     s.ghost_mirror = raw(ghost_mirror_);
     s.ghost_axes = raw(ghost_axes_);
@@ -1093,7 +1118,7 @@ class MpmCuda final : public Simulation, private mpm::SceneConstants<D, T> {
     thr::lower_bound(thr::device, gkeys_.begin(), gkeys_.end(), nbr_keys_.begin(), nbr_keys_.end(),
                      p_nbr_.begin());
     const size_t nodes = gkeys_.size() * kNodes;
-    grid_.resize(kChannels * nodes);
+    grid_.resize(static_cast<size_t>(channels_) * nodes);
     gwall_.resize(nodes);
     ghost_mirror_.resize(nodes);
     ghost_axes_.resize(nodes);
@@ -1333,8 +1358,6 @@ class MpmCuda final : public Simulation, private mpm::SceneConstants<D, T> {
 };
 
 std::unique_ptr<Simulation> make(const Scene& scene, const SimulationOptions& options) {
-  if (scene.solver.flip > 0)
-    throw InputError(scene.file, "solver.flip", "the CUDA backend transfers by APIC only (must be 0; the CPU runs FLIP)");
   const bool f = scene.solver.precision == Precision::kFloat;
   if (scene.dimension == 2) {
     if (f) return std::make_unique<MpmCuda<2, float>>(scene, options);

@@ -55,22 +55,22 @@ template <int D, typename T>
 struct GridNodes {
   std::vector<T> m, v[D], vold[D], e,
       fill;  // e: mass-weighted strain J - 1 over mass; fill: particle volume per cell volume; vold: FLIP's
-             // old velocity (2D only; empty in 3D)
+             // old velocity (empty where the solver's lanes do not carry it)
   std::vector<uint8_t> wall;  // 1 where a wall or a box set the node's velocity
-  void resize(size_t nodes) {
+  void resize(size_t nodes, bool old_velocity = false) {
     m.resize(nodes);
     e.resize(nodes);
     fill.resize(nodes);
     wall.resize(nodes);
     for (int d = 0; d < D; ++d) v[d].resize(nodes);
-    if constexpr (D == 2)
+    if (old_velocity)
       for (int d = 0; d < D; ++d) vold[d].resize(nodes);
   }
   void clear(size_t i) {  // a node without water
     m[i] = e[i] = fill[i] = T(0);
     wall[i] = 0;
     for (int d = 0; d < D; ++d) v[d][i] = T(0);
-    if constexpr (D == 2)
+    if (!vold[0].empty())
       for (int d = 0; d < D; ++d) vold[d][i] = T(0);
   }
   size_t bytes() const {  // the value arrays (the wall flags are not counted)

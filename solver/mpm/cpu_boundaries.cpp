@@ -9,8 +9,8 @@
 
 namespace flume::mpm {
 
-template <int D, typename T>
-void MpmSolver<D, T>::setup_boundaries() {
+template <int D, typename T, int Lanes>
+void MpmSolver<D, T, Lanes>::setup_boundaries() {
   walls_ = scene_walls<D, T>(scene_);
   has_sym_ = scene_symmetry_plane<D>(scene_, grid_lo_, dx_, sym_);
   zone_ = SymmetryZone<D>(sym_);
@@ -25,8 +25,8 @@ void MpmSolver<D, T>::setup_boundaries() {
 
 // After the walls and the ghosts: every node beyond the plane is the reflection of its mirror; one whose
 // mirror lies outside the zone (more than SymmetryZone::kZone cells beyond, no mass) is emptied.
-template <int D, typename T>
-void MpmSolver<D, T>::mirror_beyond_symmetry() {
+template <int D, typename T, int Lanes>
+void MpmSolver<D, T, Lanes>::mirror_beyond_symmetry() {
   const long nq = static_cast<long>(zone_.entries());
   const std::vector<uint64_t>& gkeys = blocks_.gkeys;
 #pragma omp parallel for schedule(static)
@@ -46,16 +46,17 @@ void MpmSolver<D, T>::mirror_beyond_symmetry() {
     grid_.e[idx] = grid_.e[mi];
     grid_.fill[idx] = grid_.fill[mi];
     grid_.wall[idx] = grid_.wall[mi];
-    for (int d = 0; d < D; ++d) grid_.v[d][idx] = T(symmetry_channel_sign(sym_, 1 + d)) * grid_.v[d][mi];
+    for (int d = 0; d < D; ++d) grid_.v[d][idx] = T(symmetry_channel_sign<D>(sym_, 1 + d)) * grid_.v[d][mi];
     if constexpr (kFlipChannels > 0)
-      for (int d = 0; d < D; ++d) grid_.vold[d][idx] = T(symmetry_channel_sign(sym_, 1 + d)) * grid_.vold[d][mi];
+      for (int d = 0; d < D; ++d)
+        grid_.vold[d][idx] = T(symmetry_channel_sign<D>(sym_, 1 + d)) * grid_.vold[d][mi];
   }
 }
 
-#define FLUME_INSTANTIATE(D, T)                      \
-  template void MpmSolver<D, T>::setup_boundaries(); \
-  template void MpmSolver<D, T>::mirror_beyond_symmetry();
-FLUME_MPM_CPU_VARIANTS(FLUME_INSTANTIATE)
+#define FLUME_INSTANTIATE(D, T, Lanes)                      \
+  template void MpmSolver<D, T, Lanes>::setup_boundaries(); \
+  template void MpmSolver<D, T, Lanes>::mirror_beyond_symmetry();
+FLUME_MPM_SOLVER_VARIANTS(FLUME_INSTANTIATE)
 #undef FLUME_INSTANTIATE
 
 }  // namespace flume::mpm

@@ -13,8 +13,8 @@ namespace flume::mpm {
 
 // One grid node from what the particles gave it (its lanes `acc`): momentum to velocity, gravity, the walls
 // (their loads weighted by `load_weight`), its ghost pairing and the debris coupling.
-template <int D, typename T>
-void MpmSolver<D, T>::update_node(const Lane& acc, long g, size_t idx, const int* node, bool near_debris,
+template <int D, typename T, int Lanes>
+void MpmSolver<D, T, Lanes>::update_node(const Lane& acc, long g, size_t idx, const int* node, bool near_debris,
                                   double load_weight, T dt, T inv_cell_volume, double* my_impulse,
                                   std::vector<CouplingNode>* my_coupling,
                                   std::vector<Ghost<D, T>>* my_ghosts) {
@@ -58,8 +58,8 @@ void MpmSolver<D, T>::update_node(const Lane& acc, long g, size_t idx, const int
 
 // Gathers the tiles into the grid blocks, then turns momentum into velocity, adds gravity and applies the
 // boundary conditions. Load cells sum the impulse the boundary gives the water at its nodes.
-template <int D, typename T>
-void MpmSolver<D, T>::grid_update(T dt) {
+template <int D, typename T, int Lanes>
+void MpmSolver<D, T, Lanes>::grid_update(T dt) {
   const T inv_cell_volume = T(1) / T(std::pow(dx_, D));
   const int nthreads = omp_get_max_threads();
   // A cache line (8 doubles) between one thread's load sums and the next's, wherever the buffer starts: a
@@ -135,8 +135,7 @@ void MpmSolver<D, T>::grid_update(T dt) {
       // plane take their fold (what the whole would give them) and are updated; a load on the plane is half
       // the whole's. Each reads its own entry and its mirror's beyond the plane, which nobody writes.
       Lane sign;
-      for (int c = 0; c < kLanes; ++c)  // the transfer's momentum (from lane D + 3) reflects as the momentum
-        sign[c] = T(mpm::symmetry_channel_sign(sym_, c >= D + 3 && c < kChannels ? c - (D + 2) : c));
+      for (int c = 0; c < kLanes; ++c) sign[c] = T(mpm::symmetry_channel_sign<D>(sym_, c));
       const long nq = static_cast<long>(zone_.entries());
 #pragma omp for schedule(static)
       for (long q = 0; q < nq; ++q) {
@@ -167,12 +166,12 @@ void MpmSolver<D, T>::grid_update(T dt) {
   if (debris_) debris_->couple(grid_.v, double(dt));
 }
 
-#define FLUME_INSTANTIATE(D, T)                                                                         \
-  template void MpmSolver<D, T>::update_node(const Lane&, long, size_t, const int*, bool, double, T, T, \
+#define FLUME_INSTANTIATE(D, T, Lanes)                                                                         \
+  template void MpmSolver<D, T, Lanes>::update_node(const Lane&, long, size_t, const int*, bool, double, T, T, \
                                              double*, std::vector<CouplingNode>*,                       \
                                              std::vector<Ghost<D, T>>*);                                \
-  template void MpmSolver<D, T>::grid_update(T);
-FLUME_MPM_CPU_VARIANTS(FLUME_INSTANTIATE)
+  template void MpmSolver<D, T, Lanes>::grid_update(T);
+FLUME_MPM_SOLVER_VARIANTS(FLUME_INSTANTIATE)
 #undef FLUME_INSTANTIATE
 
 }  // namespace flume::mpm

@@ -36,21 +36,21 @@
 
 namespace flume::mpm {
 
-template <int D, typename T>
+template <int D, typename T, int Lanes>
 class MpmSolver final : public Simulation, private SceneConstants<D, T> {
   static constexpr int kNodes = Pow<D>::of(kBlock);
   static constexpr int kTileNodes = Pow<D>::of(kTile);
   static constexpr int kNbr = Pow<D>::of(3);
-  // Mass, momentum (D), mass-weighted strain J - 1, particle volume; in 2D also the momentum of the transfer
-  // alone (D, mpm::p2g_transfer_momentum), FLIP's old grid velocity, which the lanes hold at no cost there (a
-  // 3D node would need 9 of the 8).
-  static constexpr int kFlipChannels = D == 2 ? D : 0;
+  // Mass, momentum (D), mass-weighted strain J - 1, particle volume; where the lanes have room, also the
+  // momentum of the transfer alone (D, mpm::p2g_transfer_momentum), FLIP's old grid velocity: free in 2D (7 of
+  // 8 lanes), in 3D only with 16 lanes (9 channels), which the factory picks for a FLIP run.
+  static constexpr int kFlipChannels = 2 * D + 3 <= Lanes ? D : 0;
   static constexpr int kChannels = D + 3 + kFlipChannels;
   // Tiles and the grid gather hold a node's channels side by side, padded to one SIMD vector (Eigen packet):
   // a particle's contribution to a node is then one vector multiply-add, not kChannels scalar ones. G2P's
   // tile holds per node the velocity, the free-node weight 1 (0 on a wall node) and the strain and fill times
   // it (and in 2D FLIP's old velocity), so one vector multiply-add per node gathers all of them.
-  static constexpr int kLanes = 8;
+  static constexpr int kLanes = Lanes;
   static constexpr int kBatch = 32;  // particles per pass of the P2G and G2P batch loops
   static_assert(kChannels <= kLanes && D + 3 + kFlipChannels <= kLanes, "channels must fit the lanes");
   using Lane = Eigen::Array<T, kLanes, 1>;
@@ -58,8 +58,8 @@ class MpmSolver final : public Simulation, private SceneConstants<D, T> {
   using ConstLaneMap = Eigen::Map<const Lane>;
   using TileBox = mpm::TileBox<D>;
   using K = SceneConstants<D, T>;  // the scene's constants (constants.h)
-  using K::dx_, K::inv_dx_, K::grid_lo_, K::gravity_, K::mu_, K::psi_, K::flip_, K::law_, K::law_d_, K::strain_slope_,
-      K::c_;
+  using K::dx_, K::inv_dx_, K::grid_lo_, K::gravity_, K::mu_, K::psi_, K::flip_, K::law_, K::law_d_,
+      K::strain_slope_, K::c_;
 
  public:
   MpmSolver(const Scene& scene, const SimulationOptions& options);  // cpu_solver.cpp

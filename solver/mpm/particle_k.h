@@ -27,9 +27,9 @@ FLUME_HD void p2g_particle(T p, const T* C, T e, T V, T m, const T* v, const T* 
   volume = V * (T(1) + e);
 }
 
-// FLIP's old grid velocity (solver.flip): what node i receives from the transfer alone, the particle's momentum
-// and APIC's affine part without the stress's impulse, before its weight: tmom0 + (m C) i dx, tmom0 = m v - m C
-// f dx. Divided by the node's mass it is the velocity the grid had before the step's forces.
+// FLIP's old grid velocity (solver.flip): what node i receives from the transfer alone, the particle's
+// momentum and APIC's affine part without the stress's impulse, before its weight: tmom0 + (m C) i dx, tmom0
+// = m v - m C f dx. Divided by the node's mass it is the velocity the grid had before the step's forces.
 template <int D, typename T>
 FLUME_HD void p2g_transfer_momentum(T m, const T* v, const T* C, const T* f, T dx, T* tmom0) {
   for (int a = 0; a < D; ++a) {
@@ -42,8 +42,8 @@ FLUME_HD void p2g_transfer_momentum(T m, const T* v, const T* C, const T* f, T d
 // G2P's velocity blended with FLIP (Zhu & Bridson 2005; over APIC, the alpha of Fei et al. 2021): the grid's
 // new velocity at the particle plus alpha times what the transfer lost, the particle's own velocity less the
 // grid's old velocity at it. APIC alone (alpha 0) loses that part at every step, a loss per step rather than
-// per second, so that the flow through the sluice gate fell as the step shrank (docs/solver.md, "The transfer's
-// loss per step"); alpha keeps that much of it.
+// per second, so that the flow through the sluice gate fell as the step shrank (docs/solver.md, "The
+// transfer's loss per step"); alpha keeps that much of it.
 template <typename T>
 FLUME_HD T flip_velocity(T v_grid_new, T v_particle, T v_grid_old, T alpha) {
   return v_grid_new + alpha * (v_particle - v_grid_old);

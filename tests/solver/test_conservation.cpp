@@ -160,6 +160,23 @@ void expect_linear_momentum_to_round_off(const Factory& make, int steps, double 
   }
 }
 TEST(Conservation, LinearMomentumToRoundOff) { expect_linear_momentum_to_round_off(cpu, 1000); }
+// FLIP (solver.flip) adds alpha (v_p - sum_i w_ip v_i_old) to each particle: summed with the masses it is the
+// particles' momentum less the old grid's, which the transfer made equal (sum_i w_ip = 1, sum_i w_ip (x_i - x_p)
+// = 0), so the blend conserves linear momentum as APIC does, to the same round-off; in 3D it runs on the solver
+// with 16 lanes (MpmSolver::kFlipChannels).
+Scene with_flip(const Scene& s) {
+  Scene flip = s;
+  flip.solver.flip = 0.9;
+  return flip;
+}
+TEST(Conservation, LinearMomentumToRoundOffWithFlip) {
+  expect_linear_momentum_to_round_off([](const Scene& s) { return cpu(with_flip(s)); }, 1000);
+}
+#ifdef FLUME_CUDA_EMULATION_AVAILABLE
+TEST(Conservation, CudaEmulationLinearMomentumToRoundOffWithFlip) {
+  expect_linear_momentum_to_round_off([](const Scene& s) { return emulated(with_flip(s)); }, 200);
+}
+#endif
 #ifdef FLUME_CUDA_EMULATION_AVAILABLE
 // 200 steps: the emulation runs on one thread (as CudaEmulation.AngularMomentumOfASpinningBlob).
 TEST(Conservation, CudaEmulationLinearMomentumToRoundOff) { expect_linear_momentum_to_round_off(emulated, 200); }

@@ -340,6 +340,18 @@ TEST(CudaEmulation, WasedaGateAndQuay2DDoubleMatchesCpu) {
   expect_within(compare(waseda_gate_and_quay(), cpu, emulated), double_bounds(0.04, 0.9));
 }
 TEST(CudaEmulation, InflowApron2DDoubleMatchesCpu) { expect_inflow_apron_matches_cpu(emulated, 1); }
+// FLIP (solver.flip): the old velocity's channels in both backends' scatters, the symmetry fold of them (the
+// half tank) and the 3D solver with 16 lanes on the CPU.
+Scene with_flip(Scene s) {
+  s.solver.flip = 0.9;
+  return s;
+}
+TEST(CudaEmulation, WasedaGateAndQuay2DDoubleWithFlipMatchesCpu) {
+  expect_within(compare(with_flip(waseda_gate_and_quay()), cpu, emulated), double_bounds(0.04, 0.9));
+}
+TEST(CudaEmulation, SymmetryPlane3DDoubleWithFlipMatchesCpu) {
+  expect_within(compare(with_flip(half_tank(0.15)), cpu, emulated), double_bounds(0.02, 0.3));
+}
 TEST(CudaEmulation, SymmetryPlane3DDoubleMatchesCpu) {
   expect_within(compare(half_tank(0.15), cpu, emulated), double_bounds(0.02, 0.3));
 }
@@ -400,6 +412,10 @@ TEST(Cuda, HydrostaticColumn2DDoubleMatchesCpu) {
 TEST(Cuda, HydrostaticColumn3DDoubleMatchesCpu) {
   SKIP_WITHOUT_DEVICE();
   expect_within(compare(column(3, "double", 0.1), cpu, gpu), double_bounds(0.01, 0.2, 10));
+}
+TEST(Cuda, SymmetryPlane3DDoubleWithFlipMatchesCpu) {
+  SKIP_WITHOUT_DEVICE();
+  expect_within(compare(with_flip(half_tank(0.15)), cpu, gpu), double_bounds(0.02, 0.3, 10));
 }
 TEST(Cuda, SymmetryPlane3DDoubleMatchesCpu) {
   SKIP_WITHOUT_DEVICE();

@@ -6,8 +6,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <map>
 #include <cstdio>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -256,34 +256,33 @@ TEST(Waseda, GateDischargeAtTwoCentimetresMatchesOne) {
   EXPECT_NEAR(coarse / fine, 1.0, 0.05);
 }
 
-// The step must not change the flow. APIC's transfer loses, at every step, the part of the particles' velocity
-// the grid cannot hold; in the jet under the gate that part is large, so halving the step (CFL 0.4 -> 0.2)
-// cut the volume past the gate in the first second from 0.166 to 0.155 m^3/m (-6.7 %; at CFL 0.1, 0.131), where
-// with the gate fully open the two agree to 0.3 %. FLIP keeps that part (solver.flip, mpm::flip_velocity): at
-// 0.9 the two steps pass 0.181 and 0.176 (docs/solver.md, "The transfer's loss per step"). Tolerance: the
-// discharge reads to 5 % at this resolution (the test above), and the step must not move it more.
+// The step must not change the flow. APIC's transfer loses, at every step, the part of the particles'
+// velocity the grid cannot hold; in the jet under the gate that part is large, so halving the step (CFL 0.4
+// -> 0.2) cut the volume past the gate in the first second from 0.166 to 0.155 m^3/m (-6.7 %; at CFL 0.1,
+// 0.131), where with the gate fully open the two agree to 0.3 %. FLIP keeps that part (solver.flip,
+// mpm::flip_velocity): at 0.9 the two steps pass 0.181 and 0.176 (docs/solver.md, "The transfer's loss per
+// step"). Tolerance: the discharge reads to 5 % at this resolution (the test above), and the step must not
+// move it more.
 TEST(Waseda, GateDischargeDoesNotDependOnTheStepWithFlip) {
   const double large = volume_past_gate("0.02", 1.0, {{"solver.flip", "0.9"}, {"solver.cfl", "0.4"}});
   const double small = volume_past_gate("0.02", 1.0, {{"solver.flip", "0.9"}, {"solver.cfl", "0.2"}});
-  std::printf("volume past x = 0.60 m by 1 s, flip 0.9: CFL 0.4 %.4f, CFL 0.2 %.4f m^3/m (ratio %.3f)\n", large,
-              small, small / large);
+  std::printf("volume past x = 0.60 m by 1 s, flip 0.9: CFL 0.4 %.4f, CFL 0.2 %.4f m^3/m (ratio %.3f)\n",
+              large, small, small / large);
   EXPECT_NEAR(small / large, 1.0, 0.05);
 }
 
-// FLIP is the CPU's 2D MPM only: a 3D scene and SPH refuse it, naming the field.
+// FLIP is MPM's: SPH refuses it, naming the field; pure FLIP (1) is out of its range.
 TEST(Waseda, FlipIsRefusedWhereItIsNotBuilt) {
-  const std::string strip = std::string(FLUME_SOURCE_DIR) + "/scenes/waseda/waseda_strip.json";
   EXPECT_THROW(
       {
         try {
-          load_scene(strip, {{"solver.flip", "0.9"}});
+          load_scene(kScene, {{"solver.flip", "0.9"}, {"solver.method", "sph"}});
         } catch (const InputError& e) {
           EXPECT_NE(std::string(e.what()).find("solver.flip"), std::string::npos) << e.what();
           throw;
         }
       },
       InputError);
-  EXPECT_THROW(load_scene(kScene, {{"solver.flip", "0.9"}, {"solver.method", "sph"}}), InputError);
   EXPECT_THROW(load_scene(kScene, {{"solver.flip", "1.0"}}), InputError);  // pure FLIP: out of range
   EXPECT_NO_THROW(load_scene(kScene, {{"solver.flip", "0.9"}}));
 }
