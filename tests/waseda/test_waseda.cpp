@@ -29,6 +29,7 @@ struct Outcome {
 };
 
 Outcome run(std::vector<Override> sets, double end_time, const char* dx = "0.04") {
+  for (const auto& o : test::env_overrides()) sets.push_back(o);  // e.g. FLUME_SET="solver.flip=0.9"
   sets.push_back({"solver.dx", dx});
   sets.push_back({"solver.end_time", std::to_string(end_time)});
   const Scene scene = load_scene(kScene, sets);
