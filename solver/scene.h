@@ -55,7 +55,7 @@ struct SolverSettings {
   int ppc = 4;  // particles per cell per axis is ppc^(1/D) rounded: ppc must be a perfect power (2D: 1,4,9; 3D: 1,8,27)
   int max_particles = 100000000;  // bound on the particles the water boxes seed, checked before allocating
   double cfl = 0.4;
-  double flip = 0.0;  // MPM's G2P: share of the particle's own velocity kept (FLIP) against APIC's; CPU only
+  double flip = 0.0;  // MPM's G2P: share of the particle's own velocity kept (FLIP) against APIC's
   Precision precision = Precision::kDouble;
   double end_time = 1.0;
   double max_dt = 1e-3;  // s, an upper bound on the adaptive step

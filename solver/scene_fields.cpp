@@ -50,8 +50,7 @@ const ObjectDoc& solver_doc() {
            .in(0, 0.99)
            .def(0.0)
            .note("0: APIC, whose every transfer damps what the grid cannot hold, so that the flow under the "
-                 "sluice gate slows as the step shrinks (docs/solver.md, \"The transfer's loss per step\"); "
-                 "the CPU backend only"),
+                 "sluice gate slows as the step shrinks (docs/solver.md, \"The transfer's loss per step\")"),
        choice("precision", {"float", "double"}, "floating-point precision of the particles and grid")
            .def("double"),
        number("end_time", "simulated time at which the run ends")

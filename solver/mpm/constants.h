@@ -32,7 +32,7 @@ struct SceneConstants {
   double grid_lo_[D] = {};  // the grid's node 0, kPad nodes below the domain
   T gravity_[D] = {};
   T mu_ = 0, psi_ = 0;      // viscosity, J-bar blend (mpm::g2p_particle)
-  T flip_ = 0;              // FLIP's share (mpm::flip_velocity; the CPU backend only)
+  T flip_ = 0;              // FLIP's share (mpm::flip_velocity)
   TaitLaw<T> law_;          // the particle loops copy it into a local: a member is reloaded after every store
   TaitLaw<double> law_d_;   // the same law in double, for the energy audit and diagnostics
   T strain_slope_[D] = {};  // s of mpm::hydrostatic_strain

@@ -9,8 +9,8 @@
 
 namespace flume::mpm {
 
-template <int D, typename T, int Lanes>
-void MpmSolver<D, T, Lanes>::setup_boundaries() {
+template <int D, typename T, bool Flip>
+void MpmSolver<D, T, Flip>::setup_boundaries() {
   walls_ = scene_walls<D, T>(scene_);
   has_sym_ = scene_symmetry_plane<D>(scene_, grid_lo_, dx_, sym_);
   zone_ = SymmetryZone<D>(sym_);
@@ -25,8 +25,8 @@ void MpmSolver<D, T, Lanes>::setup_boundaries() {
 
 // After the walls and the ghosts: every node beyond the plane is the reflection of its mirror; one whose
 // mirror lies outside the zone (more than SymmetryZone::kZone cells beyond, no mass) is emptied.
-template <int D, typename T, int Lanes>
-void MpmSolver<D, T, Lanes>::mirror_beyond_symmetry() {
+template <int D, typename T, bool Flip>
+void MpmSolver<D, T, Flip>::mirror_beyond_symmetry() {
   const long nq = static_cast<long>(zone_.entries());
   const std::vector<uint64_t>& gkeys = blocks_.gkeys;
 #pragma omp parallel for schedule(static)
@@ -53,9 +53,9 @@ void MpmSolver<D, T, Lanes>::mirror_beyond_symmetry() {
   }
 }
 
-#define FLUME_INSTANTIATE(D, T, Lanes)                      \
-  template void MpmSolver<D, T, Lanes>::setup_boundaries(); \
-  template void MpmSolver<D, T, Lanes>::mirror_beyond_symmetry();
+#define FLUME_INSTANTIATE(D, T, Flip)                      \
+  template void MpmSolver<D, T, Flip>::setup_boundaries(); \
+  template void MpmSolver<D, T, Flip>::mirror_beyond_symmetry();
 FLUME_MPM_SOLVER_VARIANTS(FLUME_INSTANTIATE)
 #undef FLUME_INSTANTIATE
 

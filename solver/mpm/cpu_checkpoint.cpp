@@ -13,8 +13,8 @@ namespace flume::mpm {
 // energy audit, the instruments, the inflow and the debris, and the block each particle was last sorted into.
 // The block lists and the grid are rebuilt from those, so a resumed run repeats the uninterrupted one step
 // for step, to the bit.
-template <int D, typename T, int Lanes>
-void MpmSolver<D, T, Lanes>::checkpoint(StateArchive& ar) {
+template <int D, typename T, bool Flip>
+void MpmSolver<D, T, Flip>::checkpoint(StateArchive& ar) {
   ar.section(std::string("mpm ") + std::to_string(D) + "D " + (sizeof(T) == 4 ? "float" : "double"));
   for (int d = 0; d < D; ++d) {
     ar(x_[d]);
@@ -44,8 +44,8 @@ void MpmSolver<D, T, Lanes>::checkpoint(StateArchive& ar) {
   }
 }
 
-template <int D, typename T, int Lanes>
-Energy MpmSolver<D, T, Lanes>::energy() const {
+template <int D, typename T, bool Flip>
+Energy MpmSolver<D, T, Flip>::energy() const {
   double ke = 0, pe = 0, el = 0;
 #pragma omp parallel for reduction(+ : ke, pe, el) schedule(static)
   for (size_t i = 0; i < n_; ++i) {
@@ -62,41 +62,41 @@ Energy MpmSolver<D, T, Lanes>::energy() const {
   return {ke, pe, el, debris_ ? debris_->bodies().energy() : 0.0};
 }
 
-template <int D, typename T, int Lanes>
-void MpmSolver<D, T, Lanes>::particle_positions(std::vector<double>& xyz) const {
+template <int D, typename T, bool Flip>
+void MpmSolver<D, T, Flip>::particle_positions(std::vector<double>& xyz) const {
   interleave_axes<D>(x_, n_, xyz);
 }
 
-template <int D, typename T, int Lanes>
-void MpmSolver<D, T, Lanes>::particle_velocities(std::vector<double>& vel) const {
+template <int D, typename T, bool Flip>
+void MpmSolver<D, T, Flip>::particle_velocities(std::vector<double>& vel) const {
   interleave_axes<D>(v_, n_, vel);
 }
 
-template <int D, typename T, int Lanes>
-void MpmSolver<D, T, Lanes>::particle_pressures(std::vector<double>& p) const {
+template <int D, typename T, bool Flip>
+void MpmSolver<D, T, Flip>::particle_pressures(std::vector<double>& p) const {
   p.resize(n_);
   for (size_t i = 0; i < n_; ++i) p[i] = law_d_.pressure(double(e_[i]));
 }
 
-template <int D, typename T, int Lanes>
-void MpmSolver<D, T, Lanes>::momentum(double linear[3], double angular[3]) const {
+template <int D, typename T, bool Flip>
+void MpmSolver<D, T, Flip>::momentum(double linear[3], double angular[3]) const {
   particles_momentum<D>(n_, rho_, dx_, x_, v_, C_, vol_, linear, angular);
 }
 
-template <int D, typename T, int Lanes>
-void MpmSolver<D, T, Lanes>::set_rigid_velocity(const double v0[3], const double omega[3], const double centre[3]) {
+template <int D, typename T, bool Flip>
+void MpmSolver<D, T, Flip>::set_rigid_velocity(const double v0[3], const double omega[3], const double centre[3]) {
   run_.max_speed = impose_rigid_motion<D>(n_, v0, omega, centre, x_, v_, C_);
   run_.restart_audit(energy());
 }
 
-#define FLUME_INSTANTIATE(D, T, Lanes)                                                   \
-  template void MpmSolver<D, T, Lanes>::checkpoint(StateArchive&);                       \
-  template Energy MpmSolver<D, T, Lanes>::energy() const;                               \
-  template void MpmSolver<D, T, Lanes>::particle_positions(std::vector<double>&) const;  \
-  template void MpmSolver<D, T, Lanes>::particle_velocities(std::vector<double>&) const; \
-  template void MpmSolver<D, T, Lanes>::particle_pressures(std::vector<double>&) const;  \
-  template void MpmSolver<D, T, Lanes>::momentum(double[3], double[3]) const;            \
-  template void MpmSolver<D, T, Lanes>::set_rigid_velocity(const double[3], const double[3], const double[3]);
+#define FLUME_INSTANTIATE(D, T, Flip)                                                   \
+  template void MpmSolver<D, T, Flip>::checkpoint(StateArchive&);                       \
+  template Energy MpmSolver<D, T, Flip>::energy() const;                               \
+  template void MpmSolver<D, T, Flip>::particle_positions(std::vector<double>&) const;  \
+  template void MpmSolver<D, T, Flip>::particle_velocities(std::vector<double>&) const; \
+  template void MpmSolver<D, T, Flip>::particle_pressures(std::vector<double>&) const;  \
+  template void MpmSolver<D, T, Flip>::momentum(double[3], double[3]) const;            \
+  template void MpmSolver<D, T, Flip>::set_rigid_velocity(const double[3], const double[3], const double[3]);
 FLUME_MPM_SOLVER_VARIANTS(FLUME_INSTANTIATE)
 #undef FLUME_INSTANTIATE
 

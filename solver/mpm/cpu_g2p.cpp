@@ -22,8 +22,8 @@ inline void copy_batch(const T* from, int n, T* to) {
 }
 
 // G2P: new velocity, affine matrix, J (with J-bar mixing) and position; checks for blow-up.
-template <int D, typename T, int Lanes>
-void MpmSolver<D, T, Lanes>::g2p(T dt) {
+template <int D, typename T, bool Flip>
+void MpmSolver<D, T, Flip>::g2p(T dt) {
   const T dx = T(dx_);
   const T cscale = T(4) * inv_dx_ * inv_dx_;
   const T fill_rate = T(mpm::fill_rate(double(dt), c_, dx_));
@@ -170,9 +170,7 @@ void MpmSolver<D, T, Lanes>::g2p(T dt) {
           }
           for (int a = 0; a < D; ++a) bv[a][j] = S[a];
           if constexpr (kFlipChannels > 0)
-            if (flip > T(0))
-              for (int a = 0; a < D; ++a)
-                bv[a][j] = mpm::flip_velocity(S[a], v_[a][b0 + j], S[D + 3 + a], flip);
+            for (int a = 0; a < D; ++a) bv[a][j] = mpm::flip_velocity(S[a], v_[a][b0 + j], S[D + 3 + a], flip);
           bJg[j] = S[D];
           bFg[j] = S[D + 1];
           bws[j] = S[D + 2];
@@ -318,7 +316,7 @@ void MpmSolver<D, T, Lanes>::g2p(T dt) {
   run_.last_energy = {ke, pe, el, e_debris};
 }
 
-#define FLUME_INSTANTIATE(D, T, Lanes) template void MpmSolver<D, T, Lanes>::g2p(T);
+#define FLUME_INSTANTIATE(D, T, Flip) template void MpmSolver<D, T, Flip>::g2p(T);
 FLUME_MPM_SOLVER_VARIANTS(FLUME_INSTANTIATE)
 #undef FLUME_INSTANTIATE
 

@@ -13,8 +13,8 @@ namespace flume::mpm {
 
 // One grid node from what the particles gave it (its lanes `acc`): momentum to velocity, gravity, the walls
 // (their loads weighted by `load_weight`), its ghost pairing and the debris coupling.
-template <int D, typename T, int Lanes>
-void MpmSolver<D, T, Lanes>::update_node(const Lane& acc, long g, size_t idx, const int* node, bool near_debris,
+template <int D, typename T, bool Flip>
+void MpmSolver<D, T, Flip>::update_node(const Lane& acc, long g, size_t idx, const int* node, bool near_debris,
                                   double load_weight, T dt, T inv_cell_volume, double* my_impulse,
                                   std::vector<CouplingNode>* my_coupling,
                                   std::vector<Ghost<D, T>>* my_ghosts) {
@@ -58,8 +58,8 @@ void MpmSolver<D, T, Lanes>::update_node(const Lane& acc, long g, size_t idx, co
 
 // Gathers the tiles into the grid blocks, then turns momentum into velocity, adds gravity and applies the
 // boundary conditions. Load cells sum the impulse the boundary gives the water at its nodes.
-template <int D, typename T, int Lanes>
-void MpmSolver<D, T, Lanes>::grid_update(T dt) {
+template <int D, typename T, bool Flip>
+void MpmSolver<D, T, Flip>::grid_update(T dt) {
   const T inv_cell_volume = T(1) / T(std::pow(dx_, D));
   const int nthreads = omp_get_max_threads();
   // A cache line (8 doubles) between one thread's load sums and the next's, wherever the buffer starts: a
@@ -166,11 +166,11 @@ void MpmSolver<D, T, Lanes>::grid_update(T dt) {
   if (debris_) debris_->couple(grid_.v, double(dt));
 }
 
-#define FLUME_INSTANTIATE(D, T, Lanes)                                                                         \
-  template void MpmSolver<D, T, Lanes>::update_node(const Lane&, long, size_t, const int*, bool, double, T, T, \
+#define FLUME_INSTANTIATE(D, T, Flip)                                                                         \
+  template void MpmSolver<D, T, Flip>::update_node(const Lane&, long, size_t, const int*, bool, double, T, T, \
                                              double*, std::vector<CouplingNode>*,                       \
                                              std::vector<Ghost<D, T>>*);                                \
-  template void MpmSolver<D, T, Lanes>::grid_update(T);
+  template void MpmSolver<D, T, Flip>::grid_update(T);
 FLUME_MPM_SOLVER_VARIANTS(FLUME_INSTANTIATE)
 #undef FLUME_INSTANTIATE
 

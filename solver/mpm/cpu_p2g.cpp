@@ -9,8 +9,8 @@
 
 namespace flume::mpm {
 
-template <int D, typename T, int Lanes>
-typename MpmSolver<D, T, Lanes>::TileBox MpmSolver<D, T, Lanes>::tile_box(long p, const T* lo_grid, T inv_dx) const {
+template <int D, typename T, bool Flip>
+typename MpmSolver<D, T, Flip>::TileBox MpmSolver<D, T, Flip>::tile_box(long p, const T* lo_grid, T inv_dx) const {
   int blk[D];
   unpack_key<D>(blocks_.pkeys[p], blk);
   const T* x[D];
@@ -20,8 +20,8 @@ typename MpmSolver<D, T, Lanes>::TileBox MpmSolver<D, T, Lanes>::tile_box(long p
 
 // P2G: each particle block scatters mass, momentum (with the MLS-MPM stress term) and mass-weighted strain J
 // - 1 into its private tile, node-major with kLanes channels per node.
-template <int D, typename T, int Lanes>
-void MpmSolver<D, T, Lanes>::p2g(T dt) {
+template <int D, typename T, bool Flip>
+void MpmSolver<D, T, Flip>::p2g(T dt) {
   const T dx = T(dx_);
   const T rho = T(rho_);
   const T stress_scale = -dt * T(4) * inv_dx_ * inv_dx_;  // times the particle's reference volume
@@ -178,9 +178,9 @@ void MpmSolver<D, T, Lanes>::p2g(T dt) {
     }
 }
 
-#define FLUME_INSTANTIATE(D, T, Lanes)                                                         \
-  template MpmSolver<D, T, Lanes>::TileBox MpmSolver<D, T, Lanes>::tile_box(long, const T*, T) const; \
-  template void MpmSolver<D, T, Lanes>::p2g(T);
+#define FLUME_INSTANTIATE(D, T, Flip)                                                         \
+  template MpmSolver<D, T, Flip>::TileBox MpmSolver<D, T, Flip>::tile_box(long, const T*, T) const; \
+  template void MpmSolver<D, T, Flip>::p2g(T);
 FLUME_MPM_SOLVER_VARIANTS(FLUME_INSTANTIATE)
 #undef FLUME_INSTANTIATE
 

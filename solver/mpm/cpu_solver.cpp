@@ -14,8 +14,8 @@
 namespace flume {
 namespace mpm {
 
-template <int D, typename T, int Lanes>
-MpmSolver<D, T, Lanes>::MpmSolver(const Scene& scene, const SimulationOptions& options)
+template <int D, typename T, bool Flip>
+MpmSolver<D, T, Flip>::MpmSolver(const Scene& scene, const SimulationOptions& options)
     : SceneConstants<D, T>(scene), scene_(scene), instruments_(scene_) {
   if (options.threads > 0) omp_set_num_threads(options.threads);
   fill_tolerance_ = T(kFillTolerance);
@@ -37,8 +37,8 @@ MpmSolver<D, T, Lanes>::MpmSolver(const Scene& scene, const SimulationOptions& o
   instruments_.sample(*this, 0.0, 0.0, true);
 }
 
-template <int D, typename T, int Lanes>
-RunStatus MpmSolver<D, T, Lanes>::step() {
+template <int D, typename T, bool Flip>
+RunStatus MpmSolver<D, T, Flip>::step() {
   if (run_.status != RunStatus::kRunning) return run_.status;
   const double dt = run_.next_dt(scene_, dx_, c_);
   if (dt == 0) return run_.status;
@@ -62,8 +62,8 @@ RunStatus MpmSolver<D, T, Lanes>::step() {
   return run_.status;
 }
 
-template <int D, typename T, int Lanes>
-void MpmSolver<D, T, Lanes>::seed_particles() {
+template <int D, typename T, bool Flip>
+void MpmSolver<D, T, Flip>::seed_particles() {
   const int per_axis = static_cast<int>(std::lround(std::pow(scene_.solver.ppc, 1.0 / D)));
   spacing_ = dx_ / per_axis;
   rho_ = scene_.fluid.density;
@@ -82,8 +82,8 @@ void MpmSolver<D, T, Lanes>::seed_particles() {
   run_.mass = water_mass(vol_, rho_);
 }
 
-template <int D, typename T, int Lanes>
-ParticleArrays<D, T> MpmSolver<D, T, Lanes>::particle_arrays() {
+template <int D, typename T, bool Flip>
+ParticleArrays<D, T> MpmSolver<D, T, Flip>::particle_arrays() {
   ParticleArrays<D, T> a;
   for (int d = 0; d < D; ++d) {
     a.x[d] = &x_[d];
@@ -97,14 +97,14 @@ ParticleArrays<D, T> MpmSolver<D, T, Lanes>::particle_arrays() {
   return a;
 }
 
-template <int D, typename T, int Lanes>
-void MpmSolver<D, T, Lanes>::sort_particles() {
+template <int D, typename T, bool Flip>
+void MpmSolver<D, T, Flip>::sort_particles() {
   blocks_.sort(particle_arrays(), n_, grid_lo_, inv_dx_, dx_, walls_);
   fit_to_blocks();
 }
 
-template <int D, typename T, int Lanes>
-void MpmSolver<D, T, Lanes>::fit_to_blocks() {
+template <int D, typename T, bool Flip>
+void MpmSolver<D, T, Flip>::fit_to_blocks() {
   if (has_sym_) {
     zone_.index(blocks_.gkeys);
     sym_acc_.resize(zone_.entries());
@@ -118,8 +118,8 @@ void MpmSolver<D, T, Lanes>::fit_to_blocks() {
 }
 
 // The inflow moves, adds and removes particles after the step; the energy audit is told what it did.
-template <int D, typename T, int Lanes>
-void MpmSolver<D, T, Lanes>::apply_inflow(double t0, double t1) {
+template <int D, typename T, bool Flip>
+void MpmSolver<D, T, Flip>::apply_inflow(double t0, double t1) {
   const auto change = inflow_->apply(t0, t1);
   boxes_current_ = false;  // it moved the buffer's particles
   run_.energy0 += change.energy;
@@ -128,18 +128,18 @@ void MpmSolver<D, T, Lanes>::apply_inflow(double t0, double t1) {
   needs_sort_ = needs_sort_ || change.structural;
 }
 
-template <int D, typename T, int Lanes>
-void MpmSolver<D, T, Lanes>::fail(const std::string& what) {
+template <int D, typename T, bool Flip>
+void MpmSolver<D, T, Flip>::fail(const std::string& what) {
   run_.fail(what);
 }
 
-template <int D, typename T, int Lanes>
-size_t MpmSolver<D, T, Lanes>::grid_bytes() const {
+template <int D, typename T, bool Flip>
+size_t MpmSolver<D, T, Flip>::grid_bytes() const {
   return grid_.bytes() + tiles_.capacity() * sizeof(T) + blocks_.bytes();
 }
 
-template <int D, typename T, int Lanes>
-std::vector<std::pair<std::string, double>> MpmSolver<D, T, Lanes>::stage_seconds() const {
+template <int D, typename T, bool Flip>
+std::vector<std::pair<std::string, double>> MpmSolver<D, T, Flip>::stage_seconds() const {
   return {{"sort", stage_s_[kStageSort]},
           {"p2g", stage_s_[kStageP2g]},
           {"grid", stage_s_[kStageGrid]},
@@ -150,8 +150,8 @@ std::vector<std::pair<std::string, double>> MpmSolver<D, T, Lanes>::stage_second
 // The memory traffic of a step without a sort, counted from what the loops touch: P2G reads the particle
 // state (x, v, C, e, vol) and writes its tile box; the grid update reads the tiles and writes the node
 // arrays; G2P reads the nodes into its tile, reads x, e and vol and writes x, v, C and e.
-template <int D, typename T, int Lanes>
-double MpmSolver<D, T, Lanes>::bytes_per_step() const {
+template <int D, typename T, bool Flip>
+double MpmSolver<D, T, Flip>::bytes_per_step() const {
   const double particles_read = double(n_) * sizeof(T) * (2 * D + D * D + 2);
   const double particles_g2p = double(n_) * sizeof(T) * ((D + 2) + (2 * D + D * D + 1));
   double tile_nodes = 0;
@@ -166,18 +166,18 @@ double MpmSolver<D, T, Lanes>::bytes_per_step() const {
   return particles_read + particles_g2p + tiles + grid;
 }
 
-#define FLUME_INSTANTIATE(D, T, Lanes)                                                                \
-  template MpmSolver<D, T, Lanes>::MpmSolver(const Scene&, const SimulationOptions&);                 \
-  template RunStatus MpmSolver<D, T, Lanes>::step();                                                  \
-  template void MpmSolver<D, T, Lanes>::seed_particles();                                             \
-  template ParticleArrays<D, T> MpmSolver<D, T, Lanes>::particle_arrays();                            \
-  template void MpmSolver<D, T, Lanes>::sort_particles();                                             \
-  template void MpmSolver<D, T, Lanes>::fit_to_blocks();                                              \
-  template void MpmSolver<D, T, Lanes>::apply_inflow(double, double);                                 \
-  template void MpmSolver<D, T, Lanes>::fail(const std::string&);                                     \
-  template size_t MpmSolver<D, T, Lanes>::grid_bytes() const;                                         \
-  template std::vector<std::pair<std::string, double>> MpmSolver<D, T, Lanes>::stage_seconds() const; \
-  template double MpmSolver<D, T, Lanes>::bytes_per_step() const;
+#define FLUME_INSTANTIATE(D, T, Flip)                                                                \
+  template MpmSolver<D, T, Flip>::MpmSolver(const Scene&, const SimulationOptions&);                 \
+  template RunStatus MpmSolver<D, T, Flip>::step();                                                  \
+  template void MpmSolver<D, T, Flip>::seed_particles();                                             \
+  template ParticleArrays<D, T> MpmSolver<D, T, Flip>::particle_arrays();                            \
+  template void MpmSolver<D, T, Flip>::sort_particles();                                             \
+  template void MpmSolver<D, T, Flip>::fit_to_blocks();                                              \
+  template void MpmSolver<D, T, Flip>::apply_inflow(double, double);                                 \
+  template void MpmSolver<D, T, Flip>::fail(const std::string&);                                     \
+  template size_t MpmSolver<D, T, Flip>::grid_bytes() const;                                         \
+  template std::vector<std::pair<std::string, double>> MpmSolver<D, T, Flip>::stage_seconds() const; \
+  template double MpmSolver<D, T, Flip>::bytes_per_step() const;
 FLUME_MPM_SOLVER_VARIANTS(FLUME_INSTANTIATE)
 #undef FLUME_INSTANTIATE
 
@@ -185,17 +185,20 @@ FLUME_MPM_SOLVER_VARIANTS(FLUME_INSTANTIATE)
 
 std::unique_ptr<Simulation> make_cpu_simulation(const Scene& scene, const SimulationOptions& options) {
   const bool f = scene.solver.precision == Precision::kFloat;
+  if (scene.solver.flip > 0) {  // FLIP's old velocity in the scatter: a solver of its own (kFlipChannels)
+    if (scene.dimension == 2) {
+      if (f) return std::make_unique<mpm::MpmSolver<2, float, true>>(scene, options);
+      return std::make_unique<mpm::MpmSolver<2, double, true>>(scene, options);
+    }
+    if (f) return std::make_unique<mpm::MpmSolver<3, float, true>>(scene, options);
+    return std::make_unique<mpm::MpmSolver<3, double, true>>(scene, options);
+  }
   if (scene.dimension == 2) {
-    if (f) return std::make_unique<mpm::MpmSolver<2, float, 8>>(scene, options);
-    return std::make_unique<mpm::MpmSolver<2, double, 8>>(scene, options);
+    if (f) return std::make_unique<mpm::MpmSolver<2, float, false>>(scene, options);
+    return std::make_unique<mpm::MpmSolver<2, double, false>>(scene, options);
   }
-  // FLIP's old velocity needs 9 channels in 3D: the wider lanes only where it is asked for.
-  if (scene.solver.flip > 0) {
-    if (f) return std::make_unique<mpm::MpmSolver<3, float, 16>>(scene, options);
-    return std::make_unique<mpm::MpmSolver<3, double, 16>>(scene, options);
-  }
-  if (f) return std::make_unique<mpm::MpmSolver<3, float, 8>>(scene, options);
-  return std::make_unique<mpm::MpmSolver<3, double, 8>>(scene, options);
+  if (f) return std::make_unique<mpm::MpmSolver<3, float, false>>(scene, options);
+  return std::make_unique<mpm::MpmSolver<3, double, false>>(scene, options);
 }
 
 }  // namespace flume

@@ -36,23 +36,23 @@
 
 namespace flume::mpm {
 
-template <int D, typename T, int Lanes>
+template <int D, typename T, bool Flip>
 class MpmSolver final : public Simulation, private SceneConstants<D, T> {
   static constexpr int kNodes = Pow<D>::of(kBlock);
   static constexpr int kTileNodes = Pow<D>::of(kTile);
   static constexpr int kNbr = Pow<D>::of(3);
-  // Mass, momentum (D), mass-weighted strain J - 1, particle volume; where the lanes have room, also the
-  // momentum of the transfer alone (D, mpm::p2g_transfer_momentum), FLIP's old grid velocity: free in 2D (7 of
-  // 8 lanes), in 3D only with 16 lanes (9 channels), which the factory picks for a FLIP run.
-  static constexpr int kFlipChannels = 2 * D + 3 <= Lanes ? D : 0;
+  // Mass, momentum (D), mass-weighted strain J - 1, particle volume; in a FLIP solver (the factory's choice
+  // where solver.flip > 0) also the momentum of the transfer alone (D, mpm::p2g_transfer_momentum), the grid's
+  // old velocity, which takes a 3D node to 9 channels and so to 16 lanes. An APIC run does none of that work.
+  static constexpr int kFlipChannels = Flip ? D : 0;
   static constexpr int kChannels = D + 3 + kFlipChannels;
   // Tiles and the grid gather hold a node's channels side by side, padded to one SIMD vector (Eigen packet):
   // a particle's contribution to a node is then one vector multiply-add, not kChannels scalar ones. G2P's
   // tile holds per node the velocity, the free-node weight 1 (0 on a wall node) and the strain and fill times
-  // it (and in 2D FLIP's old velocity), so one vector multiply-add per node gathers all of them.
-  static constexpr int kLanes = Lanes;
+  // it (and FLIP's old velocity), so one vector multiply-add per node gathers all of them.
+  static constexpr int kLanes = kChannels <= 8 ? 8 : 16;
   static constexpr int kBatch = 32;  // particles per pass of the P2G and G2P batch loops
-  static_assert(kChannels <= kLanes && D + 3 + kFlipChannels <= kLanes, "channels must fit the lanes");
+  static_assert(kChannels <= kLanes, "channels must fit the lanes");
   using Lane = Eigen::Array<T, kLanes, 1>;
   using LaneMap = Eigen::Map<Lane>;
   using ConstLaneMap = Eigen::Map<const Lane>;
