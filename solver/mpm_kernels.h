@@ -502,9 +502,22 @@ FLUME_HD void ghost_pool_terms(const T* vg, const T* vg_pre, T mg, unsigned axes
 // mirror's own where no ghost is tangential to it), and push_dv, the image's push on the mirror (the wall's
 // load; zero where none). The push acts first, then the tangential mean: the group ends with one velocity per
 // axis.
+//
+// The mirror may itself lie on a wall (`held`: the axes its walls hold, mpm::apply_boundaries): along those
+// it keeps its velocity and takes no push, its ghosts keep theirs; along the others it is free and exchanges
+// as any mirror. Next to a wall between two grid lines the ghost on the floor's row reflects onto a floor
+// node, free along the floor: left out of the exchange, that node lacked the image's push of the floor's
+// deepest water, was drawn towards the wall, and a current rose along the wall and never settled (a still
+// tank with its end wall half a cell off the grid: RMS speed 40 times that with the wall on a grid line;
+// docs/solver.md, "Walls between grid lines").
 template <int D, typename T>
-FLUME_HD void ghost_pool_velocity(const T* pool, const T* vm, T mm, T* u, T* push_dv) {
+FLUME_HD void ghost_pool_velocity(const T* pool, const T* vm, T mm, unsigned held, T* u, T* push_dv) {
   for (int a = 0; a < D; ++a) {
+    if (held & (1u << a)) {
+      u[a] = vm[a];
+      push_dv[a] = T(0);
+      continue;
+    }
     T v = vm[a];
     const T nm = pool[2 * D + a], ns = pool[3 * D + a];
     const T minority = (nm - (ns < T(0) ? -ns : ns)) / T(2);  // the pushing mass on the less weighted side
@@ -529,7 +542,7 @@ FLUME_HD void ghost_exchange(const T* vg, const T* vg_pre, T mg, const T* vm, T 
                              unsigned push_axes, T* dvg, T* dvm) {
   T pool[kGhostPoolLanes * D], u[D], push_dv[D];
   ghost_pool_terms<D>(vg, vg_pre, mg, axes, push_axes, pool);
-  ghost_pool_velocity<D>(pool, vm, mm, u, push_dv);
+  ghost_pool_velocity<D>(pool, vm, mm, 0u, u, push_dv);
   for (int a = 0; a < D; ++a) {
     dvg[a] = (axes & (1u << a)) ? T(0) : u[a] - vg[a];
     dvm[a] = u[a] - vm[a];

@@ -136,7 +136,7 @@ struct View {
   T* grid;  // channels x nodes, channel-major
   int channels;  // kChannels, or kMaxChannels with FLIP
   T flip;        // mpm::flip_velocity's alpha
-  uint8_t* gwall;
+  uint8_t* gwall;  // per node: the axes its walls hold (mpm::apply_boundaries), all of them on a moving box
   int64_t* ghost_mirror;  // per node: its reflection's grid index (mpm::ghost_half_space), or -1
   uint8_t* ghost_axes;    // per node: the normal axes the reflection keeps
   T* ghost_dv;            // D x nodes: a ghost's velocity before the walls, then its group's (GhostExchange)
@@ -376,7 +376,8 @@ struct SymmetryMirror {
 };
 
 // Grid update, one node: momentum to velocity, gravity, the scene's walls (paper eq. 2) in scene order,
-// then the domain box as a container; flags wall nodes for the J-bar average. As MpmSolver::grid_update.
+// then the domain box as a container; keeps the axes the walls hold (the J-bar average, the ghosts' mirrors).
+// As MpmSolver::grid_update.
 template <int D, typename T>
 struct GridUpdate {
   View<D, T> s;
@@ -406,8 +407,8 @@ struct GridUpdate {
     // The particles' momentum alone, before gravity and the walls: what a ghost's image reflects (mpm::ghost_pool_terms).
     for (int d = 0; d < D; ++d) s.ghost_dv[d * s.nodes + idx] = s.grid[(1 + d) * s.nodes + idx] / m;
     mpm::GhostSearch<D> found;
-    const bool on_wall = mpm::apply_boundaries<D>(xn, m, v, dt, load_weight, s.dx_d, s.subcell_rate, s.walls,
-                                                  nullptr, s.n_walls, s.container, s.impulse, found);
+    const unsigned held = mpm::apply_boundaries<D>(xn, m, v, dt, load_weight, s.dx_d, s.subcell_rate, s.walls,
+                                                   nullptr, s.n_walls, s.container, s.impulse, found);
     s.ghost_mirror[idx] = -1;
     if (found.found()) {
       int mirror[D];
@@ -419,7 +420,7 @@ struct GridUpdate {
     s.grid[(1 + D) * s.nodes + idx] /= m;
     s.grid[(2 + D) * s.nodes + idx] *= s.inv_cell_volume;  // the node's fill (mpm::fill_correction)
     for (int c = View<D, T>::kChannels; c < s.channels; ++c) s.grid[c * s.nodes + idx] /= m;  // FLIP's old velocity
-    s.gwall[idx] = on_wall ? 1 : 0;
+    s.gwall[idx] = static_cast<uint8_t>(held);
     for (int d = 0; d < D; ++d) s.grid[(1 + d) * s.nodes + idx] = v[d];
   }
 };
@@ -433,7 +434,7 @@ struct GridUpdate {
 template <int D, typename T>
 FLUME_HD bool ghost_pair(const View<D, T>& s, size_t idx, int64_t& mi) {
   mi = s.ghost_mirror[idx];
-  return mi >= 0 && s.grid[idx] > T(0) && s.grid[mi] > T(0) && !s.gwall[mi];
+  return mi >= 0 && s.grid[idx] > T(0) && s.grid[mi] > T(0) && s.gwall[mi] != mpm::all_axes<D>();
 }
 template <int D, typename T>
 struct GhostPoolAdd {
@@ -460,7 +461,8 @@ struct GhostExchange {
     T pool[mpm::kGhostPoolLanes * D], vm[D], u[D], push_dv[D];
     for (int c = 0; c < mpm::kGhostPoolLanes * D; ++c) pool[c] = s.ghost_pool[c * s.nodes + mi];
     for (int d = 0; d < D; ++d) vm[d] = s.grid[(1 + d) * s.nodes + mi];
-    mpm::ghost_pool_velocity<D>(pool, vm, s.grid[mi], u, push_dv);
+    const unsigned held = s.gwall[mi];
+    mpm::ghost_pool_velocity<D>(pool, vm, s.grid[mi], held, u, push_dv);
     const unsigned axes = s.ghost_axes[idx];
     const int wall = s.ghost_wall[idx];
     double load_weight = 1;  // 1/2 on a symmetry plane (GridUpdate)
@@ -470,7 +472,7 @@ struct GhostExchange {
       if (mpm::symmetry_side(s.sym, node[s.sym.axis]) == 0) load_weight = 0.5;
     }
     for (int d = 0; d < D; ++d) {
-      if (!(axes & (1u << d))) s.grid[(1 + d) * s.nodes + idx] = u[d];
+      if (!(axes & (1u << d)) && !(held & (1u << d))) s.grid[(1 + d) * s.nodes + idx] = u[d];
       s.ghost_dv[d * s.nodes + idx] = u[d];
       // The image's push, by this ghost's share of the pushing mass, is its wall's load.
       const T nm = pool[2 * D + d];
@@ -514,7 +516,7 @@ struct CouplingFind {
     CouplingNode c;
     if (!fill(idx, node, c)) return;
     body[idx] = c.body;
-    s.gwall[idx] = 1;
+    s.gwall[idx] = mpm::all_axes<D>();
   }
   FLUME_HD bool fill(size_t idx, const int* node, CouplingNode& c) const {
     double xn[D];

@@ -56,7 +56,7 @@ struct GridNodes {
   std::vector<T> m, v[D], vold[D], e,
       fill;  // e: mass-weighted strain J - 1 over mass; fill: particle volume per cell volume; vold: FLIP's
              // old velocity (empty where the solver's lanes do not carry it)
-  std::vector<uint8_t> wall;  // 1 where a wall or a box set the node's velocity
+  std::vector<uint8_t> wall;  // the axes along which a wall or a box holds the node (mpm::apply_boundaries)
   void resize(size_t nodes, bool old_velocity = false) {
     m.resize(nodes);
     e.resize(nodes);

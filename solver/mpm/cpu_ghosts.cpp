@@ -24,7 +24,7 @@ void GhostReflection<D, T>::reflect(GridNodes<D, T>& grid, const std::vector<uin
   }
   if (!std::is_sorted(all_.begin(), all_.end(), by_node))  // a schedule that does not keep the order
     std::sort(all_.begin(), all_.end(), by_node);
-  // Each ghost's mirror; a mirror without water or itself a wall node takes no exchange.
+  // Each ghost's mirror; a mirror without water, or held along every axis, takes no exchange.
   const long count = static_cast<long>(all_.size());
   mirror_dv_.resize(all_.size());
 #pragma omp parallel for schedule(static)
@@ -35,7 +35,7 @@ void GhostReflection<D, T>::reflect(GridNodes<D, T>& grid, const std::vector<uin
     const long gi = grid_index<D>(gkeys, all_[q].offset);
     if (gi < 0) continue;
     const size_t mi = static_cast<size_t>(gi);
-    if (grid.m[mi] > T(0) && !grid.wall[mi]) c.node = mi;
+    if (grid.m[mi] > T(0) && grid.wall[mi] != all_axes<D>()) c.node = mi;
   }
   // The ghosts grouped by mirror, each group in ghost order (its sums then do not depend on the threads).
   by_mirror_.clear();
@@ -63,13 +63,15 @@ void GhostReflection<D, T>::reflect(GridNodes<D, T>& grid, const std::vector<uin
       for (int c = 0; c < kGhostPoolLanes * D; ++c) pool[c] += terms[c];
     }
     for (int d = 0; d < D; ++d) vm[d] = grid.v[d][mi];
-    ghost_pool_velocity<D>(pool, vm, grid.m[mi], u, push_dv);
+    const unsigned held = grid.wall[mi];
+    ghost_pool_velocity<D>(pool, vm, grid.m[mi], held, u, push_dv);
     for (size_t j = group_start_[k]; j < group_start_[k + 1]; ++j) {
       const size_t q = by_mirror_[j];
       const Ghost<D, T>& gh = all_[q];
       for (int d = 0; d < D; ++d) {
         if (!(gh.axes & (1u << d))) {
-          grid.v[d][gh.idx] = u[d];  // ghosts are never mirrors: no other group reads it
+          if (!(held & (1u << d)))
+            grid.v[d][gh.idx] = u[d];  // ghosts are never mirrors: no other group reads it
         } else if (pool[2 * D + d] > T(0)) {
           mirror_dv_[q].dv[d] =
               push_dv[d] * (grid.m[gh.idx] / pool[2 * D + d]);  // the push by its share of mass

@@ -31,7 +31,7 @@ void MpmSolver<D, T, Flip>::update_node(const Lane& acc, long g, size_t idx, con
   double xn[D];
   for (int d = 0; d < D; ++d) xn[d] = mpm::node_coordinate(grid_lo_[d], node[d], dx_);
   mpm::GhostSearch<D> found;
-  uint8_t on_wall = mpm::apply_boundaries<D>(
+  uint8_t held = mpm::apply_boundaries<D>(
       xn, m, v, dt, load_weight, dx_, subcell_rate0_, walls_.data(),
       blocks_.g_bnd.data() + blocks_.g_bnd_start[g],
       static_cast<int>(blocks_.g_bnd_start[g + 1] - blocks_.g_bnd_start[g]), container_, my_impulse, found);
@@ -46,11 +46,11 @@ void MpmSolver<D, T, Flip>::update_node(const Lane& acc, long g, size_t idx, con
   // Debris: the node is a moving-wall node of the box it lies in (CpuDebris::add_node).
   if (near_debris &&
       debris_->add_node(xn, dx_, idx, m, acc[1 + D] / m, v, law_d_, strain_slope_, my_coupling))
-    on_wall = 1;
+    held = mpm::all_axes<D>();
   grid_.m[idx] = m;
   grid_.e[idx] = acc[1 + D] / m;
   grid_.fill[idx] = acc[2 + D] * inv_cell_volume;
-  grid_.wall[idx] = on_wall;
+  grid_.wall[idx] = held;
   for (int d = 0; d < D; ++d) grid_.v[d][idx] = v[d];
   if constexpr (kFlipChannels > 0)
     for (int d = 0; d < D; ++d) grid_.vold[d][idx] = acc[D + 3 + d] / m;

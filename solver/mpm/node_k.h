@@ -22,6 +22,12 @@ FLUME_HD void accumulate(T* a, T v) {
 #endif
 }
 
+// Every axis of a node held along all of them (a moving box's node, mpm::apply_boundaries' mask).
+template <int D>
+constexpr unsigned all_axes() {
+  return (1u << D) - 1;
+}
+
 // One scene boundary, as the node update reads it. Which nodes lie on a wall is decided in double
 // (mpm::wall_faces).
 template <int D, typename T>
@@ -70,12 +76,15 @@ FLUME_HD bool on_bed(const double* xn, const double* p, const double* n, double 
 // partly under a face between grid lines, drags it (mpm::subcell_drag); each adds m (v_before - v) times
 // `load_weight` (1/2 on a symmetry plane) to its load in impulse[wall * D + d] (null: no load cell reads
 // them). Then the ghost search of the free-slip walls and the domain box, and the domain box as a container.
-// Returns whether a wall set v.
+// Returns the axes along which a wall holds the node (bit a: a face normal with a component along axis a; the
+// domain box's faces; 0: the node is free), for the ghosts' exchange with a mirror on a wall
+// (mpm::ghost_pool_velocity).
 template <int D, typename T>
-FLUME_HD bool apply_boundaries(const double* xn, T m, T* v, T dt, double load_weight, double dx,
-                               double subcell_rate0, const Wall<D, T>* walls, const int32_t* ids, int count,
-                               const Container<D, T>& container, double* impulse, GhostSearch<D>& ghost) {
-  bool on_wall = false;
+FLUME_HD unsigned apply_boundaries(const double* xn, T m, T* v, T dt, double load_weight, double dx,
+                                   double subcell_rate0, const Wall<D, T>* walls, const int32_t* ids,
+                                   int count, const Container<D, T>& container, double* impulse,
+                                   GhostSearch<D>& ghost) {
+  unsigned held = 0;
   for (int q = 0; q < count; ++q) {
     const int k = ids ? ids[q] : q;
     const Wall<D, T>& w = walls[k];
@@ -99,7 +108,9 @@ FLUME_HD bool apply_boundaries(const double* xn, T m, T* v, T dt, double load_we
       }
       continue;
     }
-    on_wall = true;
+    for (int f = 0; f < faces; ++f)
+      for (int d = 0; d < D; ++d)
+        if (n[f][d] != 0.0) held |= 1u << d;
     T before[D];
     for (int d = 0; d < D; ++d) before[d] = v[d];
     if (w.box)
@@ -144,9 +155,9 @@ FLUME_HD bool apply_boundaries(const double* xn, T m, T* v, T dt, double load_we
     }
     const T zero[D] = {};
     project_velocity<D>(v, n, zero, container.bc, container.mu);
-    on_wall = true;
+    held |= 1u << d;
   }
-  return on_wall;
+  return held;
 }
 
 }  // namespace flume::mpm
