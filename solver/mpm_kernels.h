@@ -504,12 +504,10 @@ FLUME_HD void ghost_pool_terms(const T* vg, const T* vg_pre, T mg, unsigned axes
 // axis.
 //
 // The mirror may itself lie on a wall (`held`: the axes its walls hold, mpm::apply_boundaries): along those
-// it keeps its velocity and takes no push, its ghosts keep theirs; along the others it is free and exchanges
-// as any mirror. Next to a wall between two grid lines the ghost on the floor's row reflects onto a floor
-// node, free along the floor: left out of the exchange, that node lacked the image's push of the floor's
-// deepest water, was drawn towards the wall, and a current rose along the wall and never settled (a still
-// tank with its end wall half a cell off the grid: RMS speed 40 times that with the wall on a grid line;
-// docs/solver.md, "Walls between grid lines").
+// it keeps its velocity and takes no push, and its ghosts keep theirs (ghost_takes_mean); along the others it
+// is free and exchanges as any mirror. Next to a wall between two grid lines the ghost on the floor's row
+// reflects onto a floor node, free along the floor; left out, that node lacked the image's push of the
+// deepest water and a current rose along the wall for good (docs/solver.md, "Walls between grid lines").
 template <int D, typename T>
 FLUME_HD void ghost_pool_velocity(const T* pool, const T* vm, T mm, unsigned held, T* u, T* push_dv) {
   for (int a = 0; a < D; ++a) {
@@ -536,6 +534,10 @@ FLUME_HD void ghost_pool_velocity(const T* pool, const T* vm, T mm, unsigned hel
   }
 }
 
+// Whether a ghost takes its group's velocity u[a] along axis a (ghost_pool_velocity): along an axis
+// tangential to it (not in its `axes`) that its mirror's walls leave free (not in `held`).
+FLUME_HD bool ghost_takes_mean(unsigned axes, unsigned held, int a) { return !((axes | held) & (1u << a)); }
+
 // One ghost and its mirror alone, as changes: dvg along the ghost's tangential axes, dvm the mirror's.
 template <int D, typename T>
 FLUME_HD void ghost_exchange(const T* vg, const T* vg_pre, T mg, const T* vm, T mm, unsigned axes,
@@ -544,7 +546,7 @@ FLUME_HD void ghost_exchange(const T* vg, const T* vg_pre, T mg, const T* vm, T 
   ghost_pool_terms<D>(vg, vg_pre, mg, axes, push_axes, pool);
   ghost_pool_velocity<D>(pool, vm, mm, 0u, u, push_dv);
   for (int a = 0; a < D; ++a) {
-    dvg[a] = (axes & (1u << a)) ? T(0) : u[a] - vg[a];
+    dvg[a] = ghost_takes_mean(axes, 0u, a) ? u[a] - vg[a] : T(0);
     dvm[a] = u[a] - vm[a];
   }
 }

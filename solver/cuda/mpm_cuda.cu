@@ -472,7 +472,7 @@ struct GhostExchange {
       if (mpm::symmetry_side(s.sym, node[s.sym.axis]) == 0) load_weight = 0.5;
     }
     for (int d = 0; d < D; ++d) {
-      if (!(axes & (1u << d)) && !(held & (1u << d))) s.grid[(1 + d) * s.nodes + idx] = u[d];
+      if (mpm::ghost_takes_mean(axes, held, d)) s.grid[(1 + d) * s.nodes + idx] = u[d];
       s.ghost_dv[d * s.nodes + idx] = u[d];
       // The image's push, by this ghost's share of the pushing mass, is its wall's load.
       const T nm = pool[2 * D + d];

@@ -69,10 +69,9 @@ void GhostReflection<D, T>::reflect(GridNodes<D, T>& grid, const std::vector<uin
       const size_t q = by_mirror_[j];
       const Ghost<D, T>& gh = all_[q];
       for (int d = 0; d < D; ++d) {
-        if (!(gh.axes & (1u << d))) {
-          if (!(held & (1u << d)))
-            grid.v[d][gh.idx] = u[d];  // ghosts are never mirrors: no other group reads it
-        } else if (pool[2 * D + d] > T(0)) {
+        if (ghost_takes_mean(gh.axes, held, d)) {
+          grid.v[d][gh.idx] = u[d];  // ghosts are never mirrors: no other group reads it
+        } else if ((gh.axes & (1u << d)) && pool[2 * D + d] > T(0)) {
           mirror_dv_[q].dv[d] =
               push_dv[d] * (grid.m[gh.idx] / pool[2 * D + d]);  // the push by its share of mass
         }

@@ -22,7 +22,7 @@ FLUME_HD void accumulate(T* a, T v) {
 #endif
 }
 
-// Every axis of a node held along all of them (a moving box's node, mpm::apply_boundaries' mask).
+// apply_boundaries' mask with every axis held: a node of a moving box, which no ghost exchanges with.
 template <int D>
 constexpr unsigned all_axes() {
   return (1u << D) - 1;
