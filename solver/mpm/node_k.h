@@ -62,13 +62,13 @@ struct GhostSearch {
 };
 
 // Whether the node at xn is the bed's own row of a half-space (point p, normal n): inside it by less than
-// half a cell. Deeper rows are ghost nodes (mpm::ghost_half_space), whose velocity the mirror's exchange
-// sets.
+// half a cell (kBedRowDepth). Deeper rows are ghost nodes only (mpm::ghost_half_space), whose velocity the
+// mirror's exchange sets; a row a quarter to half a cell in is both, the stress first.
 template <int D>
 FLUME_HD bool on_bed(const double* xn, const double* p, const double* n, double dx) {
   double depth = 0;
   for (int d = 0; d < D; ++d) depth += (p[d] - xn[d]) * n[d];
-  return depth > -kTieCells * dx && depth < kGhostDepth * dx;
+  return depth > -kTieCells * dx && depth < kBedRowDepth * dx;
 }
 
 // The boundaries acting on the node at xn (double, m) with mass m and velocity v (after gravity): each scene

@@ -227,13 +227,16 @@ TEST(GhostMirror, MirrorNodeIsNearestTheReflection) {
   using flume::mpm::ghost_half_space;
   const double n[2] = {-1.0, 0.0};  // a solid x > 4.45 (the quay's upstream face), fluid at x < 4.45
   const double point[2] = {4.45, 0.0};
-  for (const auto& [x, expect] : std::vector<std::pair<double, int>>{{4.46, -1}, {4.48, -3}, {4.455, 0}}) {
+  for (const auto& [x, expect] :
+       std::vector<std::pair<double, int>>{{4.46, -1}, {4.48, -3}, {4.455, -1}, {4.4525, 0}}) {
     int offset[2] = {0, 0};
     unsigned axes = 0;
     bool ambiguous = false;
     const double xn[2] = {x, 0.1};
     ghost_half_space<2>(xn, point, n, 0.02, offset, axes, ambiguous);
-    EXPECT_EQ(offset[0], expect) << "node at x = " << x;  // 4.455 is a quarter cell in: held, not a ghost
+    // 4.455 is a quarter cell in: its reflection is as near the next node as itself, so it is a ghost; 4.4525,
+    // an eighth of a cell in, is its own image (held, not a ghost).
+    EXPECT_EQ(offset[0], expect) << "node at x = " << x;
     EXPECT_FALSE(ambiguous);
     // A ghost's axes say the fluid lies towards lower x.
     if (expect != 0) EXPECT_EQ(axes, (1u << 0) | (1u << flume::mpm::kGhostSignShift)) << "node at x = " << x;
