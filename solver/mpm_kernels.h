@@ -373,10 +373,10 @@ FLUME_HD void project_velocity(T* v, const T* n, const T* vb, Bc bc, T mu) {
 // takes the side the rule states, whatever its round-off (tests/solver/test_geometry_ties.cpp).
 constexpr double kTieCells = 1e-6;
 // In cells: a node at least this far inside is a ghost node: from a quarter cell in, the node nearest its
-// reflection is another node (a node half a cell inside, next to a wall between two grid lines such as the quay
-// face at x = 4.45 m with dx = 0.02 m, is one). Shallower, the node is its own image and keeps its velocity.
-// Left to its one-sided stencil, a node a quarter cell inside drifted as the deeper ghosts did before them
-// (docs/solver.md, "Walls between grid lines").
+// reflection is another node (a node half a cell inside, next to a wall between two grid lines such as the
+// quay face at x = 4.45 m with dx = 0.02 m, is one). Shallower, the node is its own image and keeps its
+// velocity. Left to its one-sided stencil, a node a quarter cell inside drifted as the deeper ghosts did
+// before them (docs/solver.md, "Walls between grid lines").
 constexpr double kGhostDepth = 0.25 - kTieCells;
 // In cells: the bed's own row of nodes (mpm::on_bed), those inside a floor by less than half a cell: the row
 // the bed stress acts on, whichever node is nearer the bed.

@@ -222,7 +222,8 @@ double rms_speed_beside_wall_between_grid_lines(const std::string& flip, const s
       {"type": "half_space", "point": [0, 0], "normal": [1, 0], "condition": "slip"},
       {"type": "half_space", "point": [0, 0], "normal": [0, 1], "condition": "slip"},
       {"type": "box", "lo": [)" + wall_x + R"(, -0.08], "hi": [2.2, 0.255], "condition": "slip"}],
-    "water": [{"lo": [0, 0], "hi": [)" + wall_x + R"(, 0.23]}]
+    "water": [{"lo": [0, 0], "hi": [)" + wall_x +
+                                           R"(, 0.23]}]
   })",
                                        "tank.json");
   auto sim = make_simulation(scene, {});
@@ -243,10 +244,10 @@ TEST(StillTank, StaysStillBesideAWallBetweenGridLines2D) {
   }
 }
 
-// The same wall three quarters of a cell off the grid: the node a quarter cell inside it is held across the wall
-// and, while only nodes half a cell in or deeper were ghosts, kept the tangential velocity of its one-sided
-// stencil; the tank stirred at 1.1e-2 m/s RMS at 4 s with APIC and 3.8e-2 m/s and growing with FLIP 0.9. Its
-// reflection is as near the next node as itself, so it is a ghost (mpm::kGhostDepth).
+// The same wall three quarters of a cell off the grid: the node a quarter cell inside it is held across the
+// wall and, while only nodes half a cell in or deeper were ghosts, kept the tangential velocity of its
+// one-sided stencil; the tank stirred at 1.1e-2 m/s RMS at 4 s with APIC and 3.8e-2 m/s and growing with FLIP
+// 0.9. Its reflection is as near the next node as itself, so it is a ghost (mpm::kGhostDepth).
 TEST(StillTank, StaysStillBesideAWallThreeQuartersOfACellOffTheGrid2D) {
   const double limit = 1e-3 * std::sqrt(kG / 0.23);
   for (const char* flip : {"0", "0.9"}) {

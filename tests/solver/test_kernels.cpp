@@ -234,8 +234,8 @@ TEST(GhostMirror, MirrorNodeIsNearestTheReflection) {
     bool ambiguous = false;
     const double xn[2] = {x, 0.1};
     ghost_half_space<2>(xn, point, n, 0.02, offset, axes, ambiguous);
-    // 4.455 is a quarter cell in: its reflection is as near the next node as itself, so it is a ghost; 4.4525,
-    // an eighth of a cell in, is its own image (held, not a ghost).
+    // 4.455 is a quarter cell in: its reflection is as near the next node as itself, so it is a
+    // ghost; 4.4525, an eighth of a cell in, is its own image (held, not a ghost).
     EXPECT_EQ(offset[0], expect) << "node at x = " << x;
     EXPECT_FALSE(ambiguous);
     // A ghost's axes say the fluid lies towards lower x.
