@@ -290,8 +290,9 @@ void expect_close_series(const std::map<std::string, TimeSeries>& a, const std::
     ASSERT_EQ(s.values.size(), t.values.size()) << what << " " << k;
     for (size_t i = 0; i < s.time.size(); ++i) EXPECT_NEAR(s.time[i], t.time[i], 1e-8) << what << " " << k;
     for (size_t i = 0; i < s.values.size(); ++i)
-      if (!(std::isnan(s.values[i]) && std::isnan(t.values[i])))
+      if (!(std::isnan(s.values[i]) && std::isnan(t.values[i]))) {
         EXPECT_NEAR(s.values[i], t.values[i], bound) << what << " " << k << " value " << i;
+      }
   }
 }
 void expect_close_values(const std::vector<double>& a, const std::vector<double>& b, double bound,

@@ -239,7 +239,9 @@ TEST(GhostMirror, MirrorNodeIsNearestTheReflection) {
     EXPECT_EQ(offset[0], expect) << "node at x = " << x;
     EXPECT_FALSE(ambiguous);
     // A ghost's axes say the fluid lies towards lower x.
-    if (expect != 0) EXPECT_EQ(axes, (1u << 0) | (1u << flume::mpm::kGhostSignShift)) << "node at x = " << x;
+    if (expect != 0) {
+      EXPECT_EQ(axes, (1u << 0) | (1u << flume::mpm::kGhostSignShift)) << "node at x = " << x;
+    }
   }
 }
 
