@@ -83,6 +83,17 @@ struct Accum {
   T divr = 0;           // div r = -sum_b V_b r_ab . grad_a W_ab: D inside the fluid, about D/2 at its surface
   int pairs = 0;
 };
+// Adds the sums S to T (visc_dt: their maximum).
+template <int D, typename T>
+FLUME_HD void add_sums(const Accum<D, T>& S, Accum<D, T>& to) {
+  for (int d = 0; d < D; ++d) to.acc[d] += S.acc[d];
+  to.drho += S.drho;
+  for (int k = 0; k < D * D; ++k) to.gradv[k] += S.gradv[k];
+  to.visc_dt = S.visc_dt > to.visc_dt ? S.visc_dt : to.visc_dt;
+  for (int d = 0; d < D; ++d) to.gradc[d] += S.gradc[d];
+  to.divr += S.divr;
+  to.pairs += S.pairs;
+}
 
 // The terms every pair shares: continuity (study eq. 7, rho_a sum_b m_b / rho_b v_ab . grad W), the symmetric
 // pressure gradient (eq. 9: -sum_b m_b (p_a + p_b) / (rho_a rho_b) grad W) and the viscosity: laminar (Lo &
@@ -103,15 +114,14 @@ FLUME_HD void pair_common(const Params<T>& P, const T* rab, T r2, T F, const T* 
   A.visc_dt = vdt > A.visc_dt ? vdt : A.visc_dt;
   // The acceleration's factors on r_ab (pressure, artificial viscosity) and on v_ab (laminar), per unit of
   // the other particle's mass.
-  T press = -F * (p_a + p_b) * (inv_rho_a * inv_rho_b), lam = 0;
-  if (P.alpha > T(0)) {
-    if (dot < T(0)) {  // approaching pairs only (Monaghan 1992): Pi_ab = -alpha c0 mu / rho_mean
-      const T mu = P.h * dot * inv_r2;
-      press += F * P.alpha * P.c0 * mu / (T(0.5) * (rho_a + rho_b));
-    }
-  } else {
-    lam = F * T(4) * P.nu * r2 * inv_r2 / (rho_a + rho_b);
-  }
+  // Both viscosities are formed and one kept, so the function has no branch (a vector loop needs none).
+  // Artificial: approaching pairs only (Monaghan 1992), Pi_ab = -alpha c0 mu / rho_mean.
+  const T mu = P.h * dot * inv_r2;
+  const T artificial = dot < T(0) ? F * P.alpha * P.c0 * mu / (T(0.5) * (rho_a + rho_b)) : T(0);
+  const T laminar = F * T(4) * P.nu * r2 * inv_r2 / (rho_a + rho_b);
+  const bool use_artificial = P.alpha > T(0);
+  const T press = -F * (p_a + p_b) * (inv_rho_a * inv_rho_b) + (use_artificial ? artificial : T(0));
+  const T lam = use_artificial ? T(0) : laminar;
   for (int d = 0; d < D; ++d) A.acc[d] += m_b * (press * rab[d] + lam * vab[d]);
   ++A.pairs;
   if (!B) return;
@@ -135,16 +145,20 @@ FLUME_HD T hydrostatic_density_slope(T rho, T p, const Params<T>& P) {
 // (eq. 9's third term, tau / rho^2 held per particle, Dalrymple & Rogers 2006) and the velocity gradient it is
 // computed from next.
 template <int D, typename T>
-FLUME_HD void pair_fluid_extras(const Params<T>& P, const T* rab, T r2, T F, const T* vab, T rho_a, T k_a,
-                                T rho_b, T inv_rho_b, T m_b, const T* tau_a, const T* tau_b, Accum<D, T>& A,
-                                T k_b = T(0), T m_a = T(0), T inv_rho_a = T(0), Accum<D, T>* B = nullptr) {
+FLUME_HD void pair_density_diffusion(const Params<T>& P, const T* rab, T r2, T F, T rho_a, T k_a, T rho_b,
+                                     T inv_rho_b, T m_b, Accum<D, T>& A, T k_b = T(0), T m_a = T(0),
+                                     T inv_rho_a = T(0), Accum<D, T>* B = nullptr) {
   T g_dot_r = 0;
   for (int d = 0; d < D; ++d) g_dot_r += P.g[d] * rab[d];
   const T V_b = m_b * inv_rho_b, V_a = m_a * inv_rho_a;
   const T diffusion = P.ddt * T(2) * F * r2 / (r2 + P.eta2);
   A.drho += diffusion * ((rho_a - rho_b) - k_a * g_dot_r) * V_b;
   if (B) B->drho += diffusion * ((rho_b - rho_a) + k_b * g_dot_r) * V_a;
-  if (P.alpha > T(0)) return;
+}
+template <int D, typename T>
+FLUME_HD void pair_sps(const T* rab, T F, const T* vab, T inv_rho_b, T m_b, const T* tau_a, const T* tau_b,
+                       Accum<D, T>& A, T m_a = T(0), T inv_rho_a = T(0), Accum<D, T>* B = nullptr) {
+  const T V_b = m_b * inv_rho_b, V_a = m_a * inv_rho_a;
   for (int i = 0; i < D; ++i) {
     T s = 0;
     for (int j = 0; j < D; ++j) {
@@ -158,6 +172,15 @@ FLUME_HD void pair_fluid_extras(const Params<T>& P, const T* rab, T r2, T F, con
     A.acc[i] += m_b * F * s;
     if (B) B->acc[i] -= m_a * F * s;
   }
+}
+// Both, the sub-particle stress only with laminar viscosity (P.alpha = 0).
+template <int D, typename T>
+FLUME_HD void pair_fluid_extras(const Params<T>& P, const T* rab, T r2, T F, const T* vab, T rho_a, T k_a,
+                                T rho_b, T inv_rho_b, T m_b, const T* tau_a, const T* tau_b, Accum<D, T>& A,
+                                T k_b = T(0), T m_a = T(0), T inv_rho_a = T(0), Accum<D, T>* B = nullptr) {
+  pair_density_diffusion<D, T>(P, rab, r2, F, rho_a, k_a, rho_b, inv_rho_b, m_b, A, k_b, m_a, inv_rho_a, B);
+  if (P.alpha > T(0)) return;
+  pair_sps<D, T>(rab, F, vab, inv_rho_b, m_b, tau_a, tau_b, A, m_a, inv_rho_a, B);
 }
 
 // The sub-particle stress over rho^2 from the velocity gradient (study eqs. 11-12, DualSPHysics' SpsTau):

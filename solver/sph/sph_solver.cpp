@@ -13,6 +13,7 @@
 #include <cmath>
 #include <limits>
 #include <sstream>
+#include <type_traits>
 
 #include "common/errors.h"
 #include "solver/checkpoint.h"
@@ -25,6 +26,8 @@
 #include "solver/sph/boundary_particles.h"
 #include "solver/sph/cell_list.h"
 #include "solver/sph/debris_particles.h"
+#include "solver/sph/fluid_pair_lanes.h"
+#include "solver/sph/gather_lanes.h"
 #include "solver/sph/ghost_nodes.h"
 #include "solver/sph/mirror.h"
 #include "solver/sph/sph_debris.h"
@@ -162,7 +165,8 @@ class SphSolver final : public Simulation {
   }
   size_t active_blocks() const override { return grid_.count; }
   size_t particle_bytes() const override {
-    return n_ * sizeof(T) * (5 * D + 5 + 2 * kS + (shifting_ ? D + 1 : 0)) + nw_ * sizeof(T) * (2 * D + 5) +
+    return n_ * sizeof(T) * (5 * D + 5 + 2 * kS + (shifting_ ? D + 1 : 0)) + n_ * sizeof(Accum<D, T>) +
+           nw_ * sizeof(T) * (2 * D + 6) +
            bodies_.n * (sizeof(T) * (4 * D + 7) + sizeof(int) + 3 * sizeof(double));
   }
 
@@ -407,7 +411,7 @@ class SphSolver final : public Simulation {
     pf_.resize(n);
     irf_.resize(n);
     kf_.resize(n);
-    for (auto& g : gradv_) g.resize(n);
+    pair_sums_.resize(n);
     visc_dt_.resize(n);
     pairs_.resize(n);
     for (int k = 0; k < kS; ++k) tau_next_[k].resize(n);
@@ -519,6 +523,7 @@ class SphSolver final : public Simulation {
     pw_.assign(nw_, T(0));
     irw_.assign(nw_, T(1) / T(scene_.fluid.density));
     mw_ = T(scene_.fluid.density * std::pow(spacing_, D));
+    mw_all_.assign(nw_, mw_);
     for (int d = 0; d < D; ++d) fw_[d].assign(nw_, T(0));
     load_impulse_.assign(scene_.boundaries.size() * D, 0.0);
   }
@@ -678,6 +683,9 @@ class SphSolver final : public Simulation {
     const T lift = T(hold_lift(t));
     const bool sps = !artificial_;
     fluid_pairs(X, V, R, shift_sums, sps);
+    const sph::NeighbourView<D, T> water = view_of(X, V, R, irf_, pf_, mass_);
+    const sph::NeighbourView<D, T> walls = view_of(xw_, vw_, RW, irw_, pw_, mw_all_);
+    const sph::NeighbourView<D, T> boxes = view_of(XB, B.v, RB, B.ir, B.p, B.mass);
     sph::parallel_for(n_, [&](size_t a) {
       T xa[D], va[D];
       for (int d = 0; d < D; ++d) {
@@ -698,17 +706,17 @@ class SphSolver final : public Simulation {
                                          tau_b, A);
             if (shift_sums) sph::pair_shift<D, T>(rab, r2, F, mass_[b] * irf_[b], A);
           });
-        for_pairs(wall_list_, xw_, vw_, x, v, [&](uint32_t b, const T* rab, T r2, const T* vab, T F) {
-          sph::pair_common<D, T>(Q, rab, r2, F, vab, rho_a, ira, p_a, RW[b], irw_[b], pw_[b], mw_, A);
-          if (shift_sums) sph::pair_shift<D, T>(rab, r2, F, mw_ * irw_[b], A);
-        });
-        if (B.n == 0) return;
-        for_pairs(B.list, XB, B.v, x, v, [&](uint32_t b, const T* rab, T r2, const T* vab, T F) {
-          sph::pair_common<D, T>(Q, rab, r2, F, vab, rho_a, ira, p_a, RB[b], B.ir[b], B.p[b], B.mass[b], A);
-          if (shift_sums) sph::pair_shift<D, T>(rab, r2, F, B.mass[b] * B.ir[b], A);
-        });
+        auto boundary = [&](const sph::CellList& list, const sph::NeighbourView<D, T>& nv) {
+          auto ranges = [&](const auto& f) { sph::for_each_neighbour_range<D>(grid_, list, x, search_, f); };
+          if (shift_sums)
+            sph::gather_pairs<D, T, true>(Q, nv, x, v, rho_a, ira, p_a, ranges, A);
+          else
+            sph::gather_pairs<D, T, false>(Q, nv, x, v, rho_a, ira, p_a, ranges, A);
+        };
+        boundary(wall_list_, walls);
+        if (B.n > 0) boundary(B.list, boxes);
       };
-      Accum<D, T> A = fluid_sums(a, shift_sums, sps);
+      Accum<D, T> A = pair_sums_[a];
       gather(P, xa, va, nullptr, false, A);
       if (near_mirror(xa)) {  // the images across the symmetry plane, gathered at this particle's own image
         T tau_a[kS], xm[D], vm[D], tau_m[kS];
@@ -751,9 +759,10 @@ class SphSolver final : public Simulation {
         }
         const T rho_k = RK[k], p_k = pk[k];
         auto gather = [&](const T* x, const T* v, Accum<D, T>& A) {
-          for_pairs(fluid_list_, X, V, x, v, [&](uint32_t b, const T* rab, T r2, const T* vab, T F) {
-            sph::pair_common<D, T>(P, rab, r2, F, vab, rho_k, irk[k], p_k, R[b], irf_[b], pf_[b], mass_[b], A);
-          });
+          auto ranges = [&](const auto& f) {
+            sph::for_each_neighbour_range<D>(grid_, fluid_list_, x, search_, f);
+          };
+          sph::gather_pairs<D, T, false>(P, water, x, v, rho_k, irk[k], p_k, ranges, A);
         };
         Accum<D, T> A;
         gather(xk, vk, A);
@@ -777,85 +786,73 @@ class SphSolver final : public Simulation {
     interactions_ += pairs;
   }
 
+  static sph::NeighbourView<D, T> view_of(const std::vector<T>* X, const std::vector<T>* V,
+                                          const std::vector<T>& rho, const std::vector<T>& inv_rho,
+                                          const std::vector<T>& p, const std::vector<T>& mass) {
+    sph::NeighbourView<D, T> view;
+    for (int d = 0; d < D; ++d) {
+      view.x[d] = X[d].data();
+      view.v[d] = V[d].data();
+    }
+    view.rho = rho.data();
+    view.inv_rho = inv_rho.data();
+    view.p = p.data();
+    view.mass = mass.data();
+    return view;
+  }
+
   // The fluid-fluid sums of every particle (acceleration, density rate, velocity gradient, viscous step
-  // limit, pair count; the shifting's sums with `shift_sums`) into a_, drho_, gradv_, visc_dt_, pairs_,
-  // gradc_ and divr_, each pair evaluated once for both particles: particle a takes the particles b after it
-  // in cell order. Slabs of cells along the grid's longest axis, slab_w_ wide, hold particles whose
-  // neighbours lie in the same slab or the next either side, so every third slab is summed at once.
+  // limit, pair count; the shifting's sums with `shift_sums`) into pair_sums_, each pair evaluated once for
+  // both particles: particle a takes the particles b after it in cell order. Slabs of cells along the grid's
+  // longest axis, slab_w_ wide, hold particles whose neighbours lie in the same slab or the next either side,
+  // so every third slab is summed at once.
   void fluid_pairs(const std::vector<T>* X, const std::vector<T>* V, const std::vector<T>& R, bool shift_sums,
                    bool sps) {
     const sph::Params<T> P = P_;
-    sph::parallel_for(n_, [&](size_t i) {
-      for (int d = 0; d < D; ++d) a_[d][i] = T(0);
-      drho_[i] = visc_dt_[i] = T(0);
-      pairs_[i] = 0;
-      if (sps)
-        for (auto& g : gradv_) g[i] = T(0);
-      if (shift_sums) {
-        for (int d = 0; d < D; ++d) gradc_[d][i] = T(0);
-        divr_[i] = T(0);
-      }
-    });
-    // Adds one side's sums to particle i's.
-    auto add = [&](size_t i, const Accum<D, T>& S) {
-      for (int d = 0; d < D; ++d) a_[d][i] += S.acc[d];
-      drho_[i] += S.drho;
-      visc_dt_[i] = S.visc_dt > visc_dt_[i] ? S.visc_dt : visc_dt_[i];
-      pairs_[i] += S.pairs;
-      if (sps)
-        for (int k = 0; k < D * D; ++k) gradv_[k][i] += S.gradv[k];
-      if (shift_sums) {
-        for (int d = 0; d < D; ++d) gradc_[d][i] += S.gradc[d];
-        divr_[i] += S.divr;
-      }
-    };
-    auto pairs_after = [&](uint32_t a) {
-      T xa[D], va[D], tau_a[kS];
+    sph::parallel_for(n_, [&](size_t i) { pair_sums_[i] = Accum<D, T>(); });
+    sph::FluidView<D, T> view;
+    for (int d = 0; d < D; ++d) {
+      view.x[d] = X[d].data();
+      view.v[d] = V[d].data();
+    }
+    view.rho = R.data();
+    view.inv_rho = irf_.data();
+    view.p = pf_.data();
+    view.mass = mass_.data();
+    view.k = kf_.data();
+    for (int k = 0; k < kS; ++k) view.tau[k] = tau_[k].data();
+    view.sums = pair_sums_.data();
+    auto pairs_after = [&](uint32_t a, auto sps_tag, auto shift_tag) {
+      T xa[D], va[D];
       for (int d = 0; d < D; ++d) {
         xa[d] = X[d][a];
         va[d] = V[d][a];
       }
-      for (int k = 0; k < kS; ++k) tau_a[k] = tau_[k][a];
-      const T rho_a = R[a], ira = irf_[a], p_a = pf_[a], m_a = mass_[a], k_a = kf_[a];
+      auto ranges_after_a = [&](const auto& f) {
+        sph::for_each_neighbour_range<D>(grid_, fluid_list_, xa, search_, [&](uint32_t b0, uint32_t b1) {
+          b0 = std::max(b0, a + 1);
+          if (b0 < b1) f(b0, b1);
+        });
+      };
       Accum<D, T> A;
-      for_pairs(
-          fluid_list_, X, V, xa, va,
-          [&](uint32_t b, const T* rab, T r2, const T* vab, T F) {
-            T tau_b[kS];
-            for (int k = 0; k < kS; ++k) tau_b[k] = tau_[k][b];
-            Accum<D, T> Bs;
-            sph::pair_common<D, T>(P, rab, r2, F, vab, rho_a, ira, p_a, R[b], irf_[b], pf_[b], mass_[b], A,
-                                   m_a, &Bs);
-            sph::pair_fluid_extras<D, T>(P, rab, r2, F, vab, rho_a, k_a, R[b], irf_[b], mass_[b], tau_a,
-                                         tau_b, A, kf_[b], m_a, ira, &Bs);
-            if (shift_sums) sph::pair_shift<D, T>(rab, r2, F, mass_[b] * irf_[b], A, m_a * ira, &Bs);
-            add(b, Bs);
-          },
-          a + 1);
-      add(a, A);
+      sph::fluid_pairs_after<D, T, decltype(sps_tag)::value, decltype(shift_tag)::value>(P, view, a, xa, va,
+                                                                                         ranges_after_a, A);
+      sph::add_sums(A, pair_sums_[a]);
     };
+    auto pairs_in_slab = [&](int s, auto sps_tag, auto shift_tag) {
+      sph::for_each_slab_range<D>(grid_, fluid_list_, slab_axis_, slab_w_, s, [&](uint32_t i0, uint32_t i1) {
+        for (uint32_t a = i0; a < i1; ++a) pairs_after(a, sps_tag, shift_tag);
+      });
+    };
+    using Yes = std::true_type;
+    using No = std::false_type;
     const int slabs = (grid_.n[slab_axis_] + slab_w_ - 1) / slab_w_;
     sph::coloured_for(slabs, 3, [&](int s) {
-      sph::for_each_slab_range<D>(grid_, fluid_list_, slab_axis_, slab_w_, s, [&](uint32_t i0, uint32_t i1) {
-        for (uint32_t a = i0; a < i1; ++a) pairs_after(a);
-      });
+      if (sps && shift_sums) pairs_in_slab(s, Yes{}, Yes{});
+      if (sps && !shift_sums) pairs_in_slab(s, Yes{}, No{});
+      if (!sps && shift_sums) pairs_in_slab(s, No{}, Yes{});
+      if (!sps && !shift_sums) pairs_in_slab(s, No{}, No{});
     });
-  }
-
-  // Particle i's fluid-fluid sums as fluid_pairs left them.
-  Accum<D, T> fluid_sums(size_t i, bool shift_sums, bool sps) const {
-    Accum<D, T> A;
-    for (int d = 0; d < D; ++d) A.acc[d] = a_[d][i];
-    A.drho = drho_[i];
-    A.visc_dt = visc_dt_[i];
-    A.pairs = pairs_[i];
-    if (sps)
-      for (int k = 0; k < D * D; ++k) A.gradv[k] = gradv_[k][i];
-    if (shift_sums) {
-      for (int d = 0; d < D; ++d) A.gradc[d] = gradc_[d][i];
-      A.divr = divr_[i];
-    }
-    return A;
   }
 
   // mDBC: the density of boundary particle k (positions XK, ghost vectors GK) from the water (at X, with the
@@ -868,19 +865,15 @@ class SphSolver final : public Simulation {
       gv[d] = GK[d][k];
       g[d] = XK[d][k] + gv[d];
     }
+    sph::NeighbourView<D, T> water;
+    for (int d = 0; d < D; ++d) water.x[d] = X[d].data();
+    water.mass = mass_.data();
+    water.inv_rho = irf_.data();
     auto gather = [&](const T* at, sph::GhostSums<D, T>& S) {
-      sph::for_each_neighbour_range<D>(grid_, fluid_list_, at, search_, [&](uint32_t b0, uint32_t b1) {
-        for (uint32_t b = b0; b < b1; ++b) {
-          T r[D], r2 = 0;
-          for (int d = 0; d < D; ++d) {
-            r[d] = at[d] - X[d][b];
-            r2 += r[d] * r[d];
-          }
-          if (r2 >= P_.support2) continue;
-          sph::pair_ghost<D, T>(P_, r, r2, sph::wendland_gradient_factor(r2, P_), mass_[b],
-                                mass_[b] * irf_[b], S);
-        }
-      });
+      auto ranges = [&](const auto& f) {
+        sph::for_each_neighbour_range<D>(grid_, fluid_list_, at, search_, f);
+      };
+      sph::gather_ghost<D, T>(P_, water, at, ranges, S);
     };
     sph::GhostSums<D, T> S;
     gather(g, S);
@@ -1038,7 +1031,7 @@ class SphSolver final : public Simulation {
   std::vector<T> xh_[D], vh_[D], rhoh_;
   std::vector<T> a_[D], drho_, pf_, irf_, kf_,
       visc_dt_;                  // pressure, 1/rho, d rho / d p of the state last evaluated
-  std::vector<T> gradv_[D * D];  // the fluid-fluid pairs' velocity gradient
+  std::vector<Accum<D, T>> pair_sums_;  // the fluid-fluid pairs' sums of the evaluation under way
   std::vector<int> pairs_;
   std::vector<T> tau_[kS], tau_next_[kS];  // sub-particle stress over rho^2, from the previous evaluation
   std::vector<T> gradc_[D], divr_;         // the shifting's sums at the last mid-step (shifting only)
@@ -1052,6 +1045,7 @@ class SphSolver final : public Simulation {
   std::vector<T> gw_[D];  // mDBC: from each wall particle to its ghost node
   std::vector<int> wall_id_;
   T mw_ = 0;
+  std::vector<T> mw_all_;  // mw_ per wall particle, for the gathers' views
 
   // Debris: the boxes (Bullet) and their boundary particles; empty without debris.
   std::unique_ptr<DebrisCoupling> debris_;

@@ -1,0 +1,109 @@
+// One point's sums over its neighbours of one kind, only its own side, written for the CPU's vector units as
+// fluid_pair_lanes.h is: the neighbours within the support are listed first (lanes.h), then one branch-free
+// loop evaluates sph_kernels.h's pair functions into per-neighbour slots, summed in a fixed order. Used for a
+// fluid particle's walls and boxes, a wall particle's water (its density rate and load), and mDBC's ghost
+// nodes.
+#pragma once
+#include <cstdint>
+
+#include "solver/sph/lanes.h"
+#include "solver/sph/sph_kernels.h"
+
+namespace flume::sph {
+
+// The particles of one kind a point's sums run over: positions, velocities, density, 1/rho, pressure, mass.
+template <int D, typename T>
+struct NeighbourView {
+  const T* x[D] = {};
+  const T* v[D] = {};
+  const T *rho = nullptr, *inv_rho = nullptr, *p = nullptr, *mass = nullptr;
+};
+
+// The point (position x, velocity v, density rho, 1/rho ir, pressure p) against the particles of `B` that
+// `ranges(f)` offers as contiguous ranges f(b0, b1): pair_common's terms (and the shifting's with kShift)
+// added to A.
+template <int D, typename T, bool kShift, class Ranges>
+void gather_pairs(const Params<T>& params, const NeighbourView<D, T>& view, const T* x, const T* v, T rho,
+                  T ir, T p, const Ranges& ranges, Accum<D, T>& A) {
+  constexpr int N = 128;
+  [[maybe_unused]] constexpr int kAcc = 0, kDrho = D, kGradc = D + 1, kDivr = 2 * D + 1, kFields = 2 * D + 2;
+  // Local copies: loads the compiler sees are neither written in the loop nor guarded by a condition.
+  const Params<T> P = params;
+  const NeighbourView<D, T> B = view;
+  uint32_t nb[N];
+  int n = 0;
+  auto flush = [&] {
+    T f[kFields][N], visc[N];
+    for (int l = 0; l < n; ++l) {
+      const int b = static_cast<int>(nb[l]);
+      T rab[D], vab[D], r2 = 0;
+      for (int d = 0; d < D; ++d) {
+        rab[d] = x[d] - B.x[d][b];
+        vab[d] = v[d] - B.v[d][b];
+        r2 += rab[d] * rab[d];
+      }
+      const T F = wendland_gradient_factor(r2, P);
+      Accum<D, T> S;
+      pair_common<D, T>(P, rab, r2, F, vab, rho, ir, p, B.rho[b], B.inv_rho[b], B.p[b], B.mass[b], S);
+      if constexpr (kShift) pair_shift<D, T>(rab, r2, F, B.mass[b] * B.inv_rho[b], S);
+      for (int d = 0; d < D; ++d) f[kAcc + d][l] = S.acc[d];
+      f[kDrho][l] = S.drho;
+      if constexpr (kShift) {
+        for (int d = 0; d < D; ++d) f[kGradc + d][l] = S.gradc[d];
+        f[kDivr][l] = S.divr;
+      }
+      visc[l] = S.visc_dt;
+    }
+    for (int d = 0; d < D; ++d) A.acc[d] += lane_sum(f[kAcc + d], n);
+    A.drho += lane_sum(f[kDrho], n);
+    if constexpr (kShift) {
+      for (int d = 0; d < D; ++d) A.gradc[d] += lane_sum(f[kGradc + d], n);
+      A.divr += lane_sum(f[kDivr], n);
+    }
+    const T vdt = lane_max(visc, n);
+    A.visc_dt = vdt > A.visc_dt ? vdt : A.visc_dt;
+    A.pairs += n;
+    n = 0;
+  };
+  ranges([&](uint32_t b0, uint32_t b1) {
+    collect_within<D, T, true>(B.x, x, P.support2, b0, b1, nb, n, flush);
+  });
+  if (n > 0) flush();
+}
+
+// mDBC: the moment sums (pair_ghost) at the point g over the particles of `B` that `ranges(f)` offers, added
+// to S. A particle at g itself counts (its kernel value).
+template <int D, typename T, class Ranges>
+void gather_ghost(const Params<T>& params, const NeighbourView<D, T>& view, const T* g, const Ranges& ranges,
+                  GhostSums<D, T>& S) {
+  constexpr int N = 128;
+  constexpr int K = D + 1;
+  const Params<T> P = params;
+  const NeighbourView<D, T> B = view;
+  uint32_t nb[N];
+  int n = 0;
+  auto flush = [&] {
+    T rhs[K][N], mom[K * K][N];
+    for (int l = 0; l < n; ++l) {
+      const int b = static_cast<int>(nb[l]);
+      T r[D], r2 = 0;
+      for (int d = 0; d < D; ++d) {
+        r[d] = g[d] - B.x[d][b];
+        r2 += r[d] * r[d];
+      }
+      GhostSums<D, T> s;
+      pair_ghost<D, T>(P, r, r2, wendland_gradient_factor(r2, P), B.mass[b], B.mass[b] * B.inv_rho[b], s);
+      for (int i = 0; i < K; ++i) rhs[i][l] = s.rhs[i];
+      for (int i = 0; i < K * K; ++i) mom[i][l] = s.A[i];
+    }
+    for (int i = 0; i < K; ++i) S.rhs[i] += lane_sum(rhs[i], n);
+    for (int i = 0; i < K * K; ++i) S.A[i] += lane_sum(mom[i], n);
+    n = 0;
+  };
+  ranges([&](uint32_t b0, uint32_t b1) {
+    collect_within<D, T, false>(B.x, g, P.support2, b0, b1, nb, n, flush);
+  });
+  if (n > 0) flush();
+}
+
+}  // namespace flume::sph
