@@ -496,6 +496,11 @@ Scene parse(const json& root_json, const std::string& file) {
     p.shifting_coef = r.number("shifting_coef");
     p.boundary =
         r.choice<SphBoundary>("boundary", {{"mdbc", SphBoundary::kMdbc}, {"dbc", SphBoundary::kDbc}});
+    p.slip = r.choice<SphSlip>(
+        "slip", {{"wall", SphSlip::kWall}, {"no_slip", SphSlip::kNoSlip}, {"free_slip", SphSlip::kFreeSlip}});
+    if (p.slip != SphSlip::kWall && p.boundary != SphBoundary::kMdbc)
+      r.fail("slip",
+             "no_slip and free_slip set the walls' velocity from their ghost nodes: they need boundary mdbc");
     // div r is D inside the water: the threshold must lie below it.
     p.shifting_threshold =
         r.number_or("shifting_threshold", dim == 2 ? 1.5 : 2.75, Bounds{0.0, double(dim), true, true});

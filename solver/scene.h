@@ -75,6 +75,7 @@ struct FluidSettings {
 enum class SphViscosity { kLaminarSps, kArtificial };
 enum class SphShifting { kNone, kLind };
 enum class SphBoundary { kMdbc, kDbc };
+enum class SphSlip { kWall, kNoSlip, kFreeSlip };
 struct SphSettings {
   double coefh = 1.0;  // smoothing length h = coefh sqrt(D) spacing (DualSPHysics; the study: h = sqrt(3) spacing)
   double cfl = 0.2;    // dt = cfl min(sqrt(h / |a|max), h / (c0 + h max visc)) (DualSPHysics' step condition)
@@ -87,6 +88,9 @@ struct SphSettings {
   // Walls and debris: modified dynamic boundary conditions (English et al. 2022), or DBC (Crespo et al.
   // 2007).
   SphBoundary boundary = SphBoundary::kMdbc;
+  // With mDBC, the velocity walls show the water: their own (DualSPHysics' "DBC vel=0"), or from the water's
+  // at their ghost nodes, no slip or free slip (DualSPHysics' SlipMode 2 and 3).
+  SphSlip slip = SphSlip::kWall;
 };
 
 // What a gauge reads (solver/connected_depth.h): the water's volume per unit area over the ground (the

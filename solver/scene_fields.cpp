@@ -81,12 +81,21 @@ const ObjectDoc& sph_doc() {
               "particle shifting: none, or Lind et al. (2012) as DualSPHysics runs it (the study's eq. 22): "
               "particles move by -A h |u| dt grad C, not at the free surface")
            .def("lind"),
-       number("shifting_coef", "A of the shifting displacement -A h |u| dt grad C").above(0).at_most(10).def(2.0),
+       number("shifting_coef", "A of the shifting displacement -A h |u| dt grad C")
+           .above(0)
+           .at_most(10)
+           .def(2.0),
        choice("boundary", {"mdbc", "dbc"},
               "walls and debris boxes: mdbc, modified dynamic boundary conditions (English et al. 2022: each "
               "boundary particle's density from the water at its mirror image across the surface), or dbc, "
               "dynamic boundary conditions (Crespo et al. 2007: density by continuity)")
            .def("mdbc"),
+       choice(
+           "slip", {"wall", "no_slip", "free_slip"},
+           "with mdbc, the velocity the walls show the water: wall, their own (DualSPHysics' DBC vel=0); "
+           "no_slip, twice theirs less the water's at their ghost nodes; free_slip, the water's there with "
+           "its normal part mirrored (DualSPHysics' SlipMode 2 and 3). Debris boxes show their own")
+           .def("wall"),
        number("shifting_threshold",
               "free-surface threshold on the divergence of position: no shifting below it, the fraction "
               "(div r - threshold) / (D - threshold) of it up to D")

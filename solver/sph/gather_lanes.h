@@ -72,8 +72,8 @@ void gather_pairs(const Params<T>& params, const NeighbourView<D, T>& view, cons
 }
 
 // mDBC: the moment sums (pair_ghost) at the point g over the particles of `B` that `ranges(f)` offers, added
-// to S. A particle at g itself counts (its kernel value).
-template <int D, typename T, class Ranges>
+// to S, with kVel the velocity sum too. A particle at g itself counts (its kernel value).
+template <int D, typename T, bool kVel, class Ranges>
 void gather_ghost(const Params<T>& params, const NeighbourView<D, T>& view, const T* g, const Ranges& ranges,
                   GhostSums<D, T>& S) {
   constexpr int N = 128;
@@ -83,21 +83,27 @@ void gather_ghost(const Params<T>& params, const NeighbourView<D, T>& view, cons
   uint32_t nb[N];
   int n = 0;
   auto flush = [&] {
-    T rhs[K][N], mom[K * K][N];
+    T rhs[K][N], mom[K * K][N], vel[D][kVel ? N : 1];
     for (int l = 0; l < n; ++l) {
       const int b = static_cast<int>(nb[l]);
-      T r[D], r2 = 0;
+      T r[D], r2 = 0, vb[D];
       for (int d = 0; d < D; ++d) {
         r[d] = g[d] - B.x[d][b];
         r2 += r[d] * r[d];
+        if constexpr (kVel) vb[d] = B.v[d][b];
       }
       GhostSums<D, T> s;
-      pair_ghost<D, T>(P, r, r2, wendland_gradient_factor(r2, P), B.mass[b], B.mass[b] * B.inv_rho[b], s);
+      pair_ghost<D, T>(P, r, r2, wendland_gradient_factor(r2, P), B.mass[b], B.mass[b] * B.inv_rho[b], s,
+                       kVel ? vb : nullptr);
       for (int i = 0; i < K; ++i) rhs[i][l] = s.rhs[i];
       for (int i = 0; i < K * K; ++i) mom[i][l] = s.A[i];
+      if constexpr (kVel)
+        for (int d = 0; d < D; ++d) vel[d][l] = s.vel[d];
     }
     for (int i = 0; i < K; ++i) S.rhs[i] += lane_sum(rhs[i], n);
     for (int i = 0; i < K * K; ++i) S.A[i] += lane_sum(mom[i], n);
+    if constexpr (kVel)
+      for (int d = 0; d < D; ++d) S.vel[d] += lane_sum(vel[d], n);
     n = 0;
   };
   ranges([&](uint32_t b0, uint32_t b1) {

@@ -246,16 +246,22 @@ FLUME_HD void shift_displacement(const Params<T>& P, const T* gradc, T divr, T s
 // rho . r to first order, the sums of m_b W and m_b grad W over the water are the moment matrix
 //   A = [[sum V W, sum V W r^T], [sum V grad W, sum V grad W r^T]]   (V = m_b / rho_b)
 // times u = (rho_g, -grad rho).
+// For the slip modes (ghost_slip_velocity) the sums also hold sum V W v, the water's velocity there times
+// A[0].
 template <int D, typename T>
 struct GhostSums {
   static constexpr int kN = D + 1;
   T rhs[kN] = {};     // sum m_b W, sum m_b grad W
   T A[kN * kN] = {};  // row-major
+  T vel[D] = {};      // sum V W v (with v_b given)
 };
 template <int D, typename T>
-FLUME_HD void pair_ghost(const Params<T>& P, const T* r, T r2, T F, T m_b, T V_b, GhostSums<D, T>& S) {
+FLUME_HD void pair_ghost(const Params<T>& P, const T* r, T r2, T F, T m_b, T V_b, GhostSums<D, T>& S,
+                         const T* v_b = nullptr) {
   constexpr int N = D + 1;
   const T W = wendland_w(std::sqrt(r2) * P.inv_h, P.w_alpha);
+  if (v_b)
+    for (int d = 0; d < D; ++d) S.vel[d] += V_b * W * v_b[d];
   T row[N];  // (W, grad W) of this pair
   row[0] = W;
   for (int d = 0; d < D; ++d) row[1 + d] = F * r[d];
@@ -276,6 +282,7 @@ FLUME_HD void add_reflected_ghost(int axis, const GhostSums<D, T>& m, GhostSums<
     S.rhs[i] += flips(i) ? -m.rhs[i] : m.rhs[i];
     for (int j = 0; j < N; ++j) S.A[i * N + j] += flips(i) != flips(j) ? -m.A[i * N + j] : m.A[i * N + j];
   }
+  for (int d = 0; d < D; ++d) S.vel[d] += d == axis ? -m.vel[d] : m.vel[d];
 }
 // The wall particle's density, rho_g + grad rho . (x_k - g) for ghost vector gv = g - x_k, floored at rho0 as
 // for DBC (a wall does not pull on the water: near its free surface the water's pressure extrapolates below
@@ -324,6 +331,31 @@ FLUME_HD T ghost_density(const GhostSums<D, T>& S, const T* gv, T rho0) {
   T rho = u[0];
   for (int d = 0; d < D; ++d) rho += u[1 + d] * gv[d];  // -grad rho . (x_k - g) = u[1:] . gv
   return rho > rho0 ? rho : rho0;
+}
+
+// mDBC's slip modes (DualSPHysics' SlipMode): the velocity a wall particle (its wall moving at vw) shows the
+// water, from the water's at its ghost node, vg = sum V W v / sum V W (Shepard), and the unit normal n from
+// the particle towards the ghost. No slip: 2 vw - vg, so the velocity interpolated across the face is the
+// wall's. Free slip: vg's tangential part kept and its normal part mirrored about the wall's, vg_t + 2 vw_n -
+// vg_n, so the face takes no shear and lets no water through. (DualSPHysics' free slip drops the tangential
+// part on a moving wall; here the wall's tangential motion does not drag the water either way.)
+enum class Slip { kWall, kNoSlip, kFreeSlip };
+template <int D, typename T>
+FLUME_HD void ghost_slip_velocity(Slip mode, const GhostSums<D, T>& S, const T* gv, const T* vw, T* out) {
+  T vg[D];
+  for (int d = 0; d < D; ++d) vg[d] = S.vel[d] / S.A[0];
+  if (mode == Slip::kNoSlip) {
+    for (int d = 0; d < D; ++d) out[d] = T(2) * vw[d] - vg[d];
+    return;
+  }
+  T len2 = 0, gn = 0, wn = 0;
+  for (int d = 0; d < D; ++d) len2 += gv[d] * gv[d];
+  const T inv = T(1) / std::sqrt(len2);
+  for (int d = 0; d < D; ++d) {
+    gn += vg[d] * gv[d] * inv;
+    wn += vw[d] * gv[d] * inv;
+  }
+  for (int d = 0; d < D; ++d) out[d] = vg[d] + (T(2) * wn - T(2) * gn) * gv[d] * inv;
 }
 
 // Symplectic position-Verlet stages (DualSPHysics' Symplectic, Monaghan 2005). Predictor to t + dt/2:

@@ -328,6 +328,9 @@ class SphSolver final : public Simulation {
     Pd_.sps_ci = 2.0 / 3.0 * 0.0066 * delta * delta;
     shifting_ = s.shifting == SphShifting::kLind;
     mdbc_ = s.boundary == SphBoundary::kMdbc;
+    slip_ = s.slip == SphSlip::kNoSlip
+                ? sph::Slip::kNoSlip
+                : (s.slip == SphSlip::kFreeSlip ? sph::Slip::kFreeSlip : sph::Slip::kWall);
     Pd_.shift_ah = shifting_ ? s.shifting_coef * h_ : 0.0;
     Pd_.shift_tfs = s.shifting_threshold;
     Pd_.shift_dim = D;
@@ -524,6 +527,7 @@ class SphSolver final : public Simulation {
     irw_.assign(nw_, T(1) / T(scene_.fluid.density));
     mw_ = T(scene_.fluid.density * std::pow(spacing_, D));
     mw_all_.assign(nw_, mw_);
+    for (int d = 0; d < D; ++d) vwe_[d] = vw_[d];
     for (int d = 0; d < D; ++d) fw_[d].assign(nw_, T(0));
     load_impulse_.assign(scene_.boundaries.size() * D, 0.0);
   }
@@ -662,12 +666,19 @@ class SphSolver final : public Simulation {
     if (mdbc_) {
       // The walls' and the boxes' densities from the water at their ghost nodes, this state's; where too
       // little water lies round a ghost, the density by continuity that the step carried (DBC's).
+      // With a slip mode the walls also show the water a velocity from the water's at their ghost nodes,
+      // their own where the water there is too little.
+      const bool slip = slip_ != sph::Slip::kWall;
       sph::parallel_for(nw_, [&](size_t k) {
-        const T r = ghost_density(X, xw_, gw_, k);
+        T v[D];
+        const T r = ghost_density(X, xw_, gw_, k, slip ? V : nullptr, v);
         if (r > T(0)) RW[k] = r;
+        if (!slip) return;
+        for (int d = 0; d < D; ++d) vwe_[d][k] = r > T(0) ? v[d] : vw_[d][k];
       });
       sph::parallel_for(bodies_.n, [&](size_t k) {
-        const T r = ghost_density(X, XB, bodies_.g, k);
+        T v[D];
+        const T r = ghost_density(X, XB, bodies_.g, k, nullptr, v);
         if (r > T(0)) RB[k] = r;
       });
     }
@@ -684,7 +695,7 @@ class SphSolver final : public Simulation {
     const bool sps = !artificial_;
     fluid_pairs(X, V, R, shift_sums, sps);
     const sph::NeighbourView<D, T> water = view_of(X, V, R, irf_, pf_, mass_);
-    const sph::NeighbourView<D, T> walls = view_of(xw_, vw_, RW, irw_, pw_, mw_all_);
+    const sph::NeighbourView<D, T> walls = view_of(xw_, vwe_, RW, irw_, pw_, mw_all_);
     const sph::NeighbourView<D, T> boxes = view_of(XB, B.v, RB, B.ir, B.p, B.mass);
     sph::parallel_for(n_, [&](size_t a) {
       T xa[D], va[D];
@@ -778,7 +789,8 @@ class SphSolver final : public Simulation {
         for (int d = 0; d < D; ++d) f_out[d][k] = mass_of(k) * A.acc[d];
       });
     };
-    boundary_rates(nw_, xw_, vw_, RW, irw_, pw_, [&](size_t) { return mw_; }, drhow_, fw_);
+    boundary_rates(
+        nw_, xw_, vwe_, RW, irw_, pw_, [&](size_t) { return mw_; }, drhow_, fw_);
     boundary_rates(B.n, XB, B.v, RB, B.ir, B.p, [&](size_t k) { return B.mass[k]; }, B.drho, B.f);
     long pairs = 0;
 #pragma omp parallel for reduction(+ : pairs) schedule(static)
@@ -857,23 +869,30 @@ class SphSolver final : public Simulation {
 
   // mDBC: the density of boundary particle k (positions XK, ghost vectors GK) from the water (at X, with the
   // masses and the 1/rho this evaluation computed) round its ghost node, and round the node's image across a
-  // symmetry plane; 0 where that water is too little (sph::ghost_density).
-  T ghost_density(const std::vector<T>* X, const std::vector<T>* XK, const std::vector<T>* GK,
-                  size_t k) const {
+  // symmetry plane; 0 where that water is too little (sph::ghost_density). With the water's velocities V,
+  // also the velocity the particle shows the water in the slip mode (into v; where the density is not 0).
+  T ghost_density(const std::vector<T>* X, const std::vector<T>* XK, const std::vector<T>* GK, size_t k,
+                  const std::vector<T>* V, T* v) const {
     T g[D], gv[D];
     for (int d = 0; d < D; ++d) {
       gv[d] = GK[d][k];
       g[d] = XK[d][k] + gv[d];
     }
     sph::NeighbourView<D, T> water;
-    for (int d = 0; d < D; ++d) water.x[d] = X[d].data();
+    for (int d = 0; d < D; ++d) {
+      water.x[d] = X[d].data();
+      if (V) water.v[d] = V[d].data();
+    }
     water.mass = mass_.data();
     water.inv_rho = irf_.data();
     auto gather = [&](const T* at, sph::GhostSums<D, T>& S) {
       auto ranges = [&](const auto& f) {
         sph::for_each_neighbour_range<D>(grid_, fluid_list_, at, search_, f);
       };
-      sph::gather_ghost<D, T>(P_, water, at, ranges, S);
+      if (V)
+        sph::gather_ghost<D, T, true>(P_, water, at, ranges, S);
+      else
+        sph::gather_ghost<D, T, false>(P_, water, at, ranges, S);
     };
     sph::GhostSums<D, T> S;
     gather(g, S);
@@ -884,7 +903,13 @@ class SphSolver final : public Simulation {
       gather(gm, M);
       sph::add_reflected_ghost(mirror_.axis, M, S);
     }
-    return sph::ghost_density<D, T>(S, gv, P_.rho0);
+    const T rho = sph::ghost_density<D, T>(S, gv, P_.rho0);
+    if (V && rho > T(0)) {
+      T vw[D];
+      for (int d = 0; d < D; ++d) vw[d] = vw_[d][k];
+      sph::ghost_slip_velocity<D, T>(slip_, S, gv, vw, v);
+    }
+    return rho;
   }
 
   // Particle shifting after the corrector, from the mid-step sums and speed (DualSPHysics adds it to the
@@ -1019,6 +1044,7 @@ class SphSolver final : public Simulation {
   bool artificial_ = false;
   bool shifting_ = false;
   bool mdbc_ = false;  // walls and boxes by mDBC (ghost nodes) rather than DBC (continuity)
+  sph::Slip slip_ = sph::Slip::kWall;  // mDBC's slip mode for the walls
   double spacing_ = 0, h_ = 0, search_ = 0, g_norm_ = 0;
   sph::CellGrid<D> grid_;
   sph::CellList fluid_list_, wall_list_;
@@ -1041,6 +1067,7 @@ class SphSolver final : public Simulation {
   // Walls: fixed positions and prescribed velocities, density at t and t + dt/2, its rate, pressure, pair
   // force.
   size_t nw_ = 0;
+  std::vector<T> vwe_[D];  // the velocity each wall particle shows the water: vw_, or its slip mode's
   std::vector<T> xw_[D], vw_[D], rhow_, rhowh_, drhow_, pw_, irw_, fw_[D];
   std::vector<T> gw_[D];  // mDBC: from each wall particle to its ghost node
   std::vector<int> wall_id_;

@@ -213,8 +213,9 @@ TEST_P(ExtremeValue, EndsOkConservingOrUnstableWithAMessage) {
 
   ASSERT_TRUE(out.status == store::RunStatus::kOk || out.status == store::RunStatus::kUnstable)
       << c.name << " ended " << store::to_string(out.status) << ": " << out.message;
-  if (c.must_complete)
+  if (c.must_complete) {
     EXPECT_EQ(out.status, store::RunStatus::kOk) << c.name << " (" << c.checks << "): " << out.message;
+  }
 
   // run.json: its status agrees with the exit, and no metric is NaN, infinite or null.
   std::ifstream in(dir / "run.json");
