@@ -15,11 +15,9 @@ namespace flume::sph {
 
 // The fluid particles' arrays in cell order, and their sums.
 template <int D, typename T>
-struct FluidView {
+struct FluidView : NeighbourView<D, T> {
   static constexpr int kS = Sym<D>::kSize;
-  const T* x[D] = {};
-  const T* v[D] = {};
-  const T *rho = nullptr, *inv_rho = nullptr, *p = nullptr, *mass = nullptr, *k = nullptr;
+  const T* k = nullptr;  // d rho / d p
   const T* tau[kS] = {};
   Accum<D, T>* sums = nullptr;  // per particle, one struct: a neighbour's terms land in a cache line or two
 };
@@ -49,12 +47,8 @@ void evaluate_pairs(const Params<T>& params, const FluidView<D, T>& view, uint32
   LaneSums<D, T, N> SA, SB;
   for (int l = 0; l < n; ++l) {
     const int b = static_cast<int>(nb[l]);
-    T rab[D], vab[D], r2 = 0;
-    for (int d = 0; d < D; ++d) {
-      rab[d] = xa[d] - V.x[d][b];
-      vab[d] = va[d] - V.v[d][b];
-      r2 += rab[d] * rab[d];
-    }
+    T rab[D], vab[D];
+    const T r2 = separation<D, T>(V, b, xa, va, rab, vab);
     const T F = wendland_gradient_factor(r2, P);
     Accum<D, T> Ap, Bp;
     const T rho_b = V.rho[b], irb = V.inv_rho[b], m_b = V.mass[b];

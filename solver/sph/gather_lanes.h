@@ -11,14 +11,6 @@
 
 namespace flume::sph {
 
-// The particles of one kind a point's sums run over: positions, velocities, density, 1/rho, pressure, mass.
-template <int D, typename T>
-struct NeighbourView {
-  const T* x[D] = {};
-  const T* v[D] = {};
-  const T *rho = nullptr, *inv_rho = nullptr, *p = nullptr, *mass = nullptr;
-};
-
 // The point (position x, velocity v, density rho, 1/rho ir, pressure p) against the particles of `B` that
 // `ranges(f)` offers as contiguous ranges f(b0, b1): pair_common's terms (and the shifting's with kShift)
 // added to A.

@@ -7,6 +7,26 @@
 
 namespace flume::sph {
 
+// The particles of one kind a point's sums run over: positions, velocities, density, 1/rho, pressure, mass.
+template <int D, typename T>
+struct NeighbourView {
+  const T* x[D] = {};
+  const T* v[D] = {};
+  const T *rho = nullptr, *inv_rho = nullptr, *p = nullptr, *mass = nullptr;
+};
+
+// r = x - x_b and w = v - v_b for particle b of B; returns r . r.
+template <int D, typename T>
+inline T separation(const NeighbourView<D, T>& B, int b, const T* x, const T* v, T* r, T* w) {
+  T r2 = 0;
+  for (int d = 0; d < D; ++d) {
+    r[d] = x[d] - B.x[d][b];
+    w[d] = v[d] - B.v[d][b];
+    r2 += r[d] * r[d];
+  }
+  return r2;
+}
+
 // Appends to nb[n ..] the particles of [b0, b1) (positions X, one array per axis) within the support of x:
 // r^2 < support2, and r^2 > 0 with kSkipSelf (a particle's own position, whose terms are zero). The
 // distances are taken kScan at once by a vector loop; flush() is called, and must empty the list, before it

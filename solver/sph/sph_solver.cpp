@@ -823,14 +823,7 @@ class SphSolver final : public Simulation {
     const sph::Params<T> P = P_;
     sph::parallel_for(n_, [&](size_t i) { pair_sums_[i] = Accum<D, T>(); });
     sph::FluidView<D, T> view;
-    for (int d = 0; d < D; ++d) {
-      view.x[d] = X[d].data();
-      view.v[d] = V[d].data();
-    }
-    view.rho = R.data();
-    view.inv_rho = irf_.data();
-    view.p = pf_.data();
-    view.mass = mass_.data();
+    static_cast<sph::NeighbourView<D, T>&>(view) = view_of(X, V, R, irf_, pf_, mass_);
     view.k = kf_.data();
     for (int k = 0; k < kS; ++k) view.tau[k] = tau_[k].data();
     view.sums = pair_sums_.data();
