@@ -5,8 +5,9 @@
 //
 // Fluid particles are stored as structure-of-arrays and re-sorted by cell at the start of every step; the
 // wall particles (fixed; their density from the water at their ghost nodes, mDBC, or evolved by continuity,
-// DBC; floored at rho0) are sorted once. Each loop body reads its neighbours and writes only its own
-// particle: race-free without atomics, and the result does not depend on the number of threads.
+// DBC; floored at rho0) are sorted once. The fluid-fluid pairs are summed once for both particles, slabs of
+// cells three apart at once (sph_launch.h); every other loop body writes only its own particle. Race-free
+// without atomics, and the result does not depend on the number of threads.
 #include <omp.h>
 
 #include <algorithm>
