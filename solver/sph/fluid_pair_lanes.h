@@ -22,7 +22,7 @@ struct FluidView : NeighbourView<D, T> {
   Accum<D, T>* sums = nullptr;  // per particle, one struct: a neighbour's terms land in a cache line or two
 };
 
-// The sums one pair side leaves, one slot per candidate of a chunk.
+// The sums one side of each pair leaves, one slot per neighbour in the list.
 template <int D, typename T, int N>
 struct LaneSums {
   static constexpr int kFields = D + 1 + D * D + D + 1;  // acc, drho, gradv, gradc, divr

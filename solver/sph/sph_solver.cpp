@@ -664,6 +664,7 @@ class SphSolver final : public Simulation {
       irf_[i] = T(1) / R[i];
       kf_[i] = sph::hydrostatic_density_slope(R[i], pf_[i], P);
     });
+    const sph::NeighbourView<D, T> water = view_of(X, V, R, irf_, pf_, mass_);
     if (mdbc_) {
       // The walls' and the boxes' densities from the water at their ghost nodes, this state's; where too
       // little water lies round a ghost, the density by continuity that the step carried (DBC's).
@@ -672,14 +673,14 @@ class SphSolver final : public Simulation {
       const bool slip = slip_ != sph::Slip::kWall;
       sph::parallel_for(nw_, [&](size_t k) {
         T v[D];
-        const T r = ghost_density(X, xw_, gw_, k, slip ? V : nullptr, v);
+        const T r = ghost_density(water, xw_, gw_, k, slip, v);
         if (r > T(0)) RW[k] = r;
         if (!slip) return;
         for (int d = 0; d < D; ++d) vwe_[d][k] = r > T(0) ? v[d] : vw_[d][k];
       });
       sph::parallel_for(bodies_.n, [&](size_t k) {
         T v[D];
-        const T r = ghost_density(X, XB, bodies_.g, k, nullptr, v);
+        const T r = ghost_density(water, XB, bodies_.g, k, false, v);
         if (r > T(0)) RB[k] = r;
       });
     }
@@ -694,8 +695,7 @@ class SphSolver final : public Simulation {
     });
     const T lift = T(hold_lift(t));
     const bool sps = !artificial_;
-    fluid_pairs(X, V, R, shift_sums, sps);
-    const sph::NeighbourView<D, T> water = view_of(X, V, R, irf_, pf_, mass_);
+    fluid_pairs(water, shift_sums, sps);
     const sph::NeighbourView<D, T> walls = view_of(xw_, vwe_, RW, irw_, pw_, mw_all_);
     const sph::NeighbourView<D, T> boxes = view_of(XB, B.v, RB, B.ir, B.p, B.mass);
     sph::parallel_for(n_, [&](size_t a) {
@@ -819,20 +819,19 @@ class SphSolver final : public Simulation {
   // both particles: particle a takes the particles b after it in cell order. Slabs of cells along the grid's
   // longest axis, slab_w_ wide, hold particles whose neighbours lie in the same slab or the next either side,
   // so every third slab is summed at once.
-  void fluid_pairs(const std::vector<T>* X, const std::vector<T>* V, const std::vector<T>& R, bool shift_sums,
-                   bool sps) {
+  void fluid_pairs(const sph::NeighbourView<D, T>& water, bool shift_sums, bool sps) {
     const sph::Params<T> P = P_;
     sph::parallel_for(n_, [&](size_t i) { pair_sums_[i] = Accum<D, T>(); });
     sph::FluidView<D, T> view;
-    static_cast<sph::NeighbourView<D, T>&>(view) = view_of(X, V, R, irf_, pf_, mass_);
+    static_cast<sph::NeighbourView<D, T>&>(view) = water;
     view.k = kf_.data();
     for (int k = 0; k < kS; ++k) view.tau[k] = tau_[k].data();
     view.sums = pair_sums_.data();
     auto pairs_after = [&](uint32_t a, auto sps_tag, auto shift_tag) {
       T xa[D], va[D];
       for (int d = 0; d < D; ++d) {
-        xa[d] = X[d][a];
-        va[d] = V[d][a];
+        xa[d] = water.x[d][a];
+        va[d] = water.v[d][a];
       }
       auto ranges_after_a = [&](const auto& f) {
         sph::for_each_neighbour_range<D>(grid_, fluid_list_, xa, search_, [&](uint32_t b0, uint32_t b1) {
@@ -861,29 +860,22 @@ class SphSolver final : public Simulation {
     });
   }
 
-  // mDBC: the density of boundary particle k (positions XK, ghost vectors GK) from the water (at X, with the
-  // masses and the 1/rho this evaluation computed) round its ghost node, and round the node's image across a
-  // symmetry plane; 0 where that water is too little (sph::ghost_density). With the water's velocities V,
-  // also the velocity the particle shows the water in the slip mode (into v; where the density is not 0).
-  T ghost_density(const std::vector<T>* X, const std::vector<T>* XK, const std::vector<T>* GK, size_t k,
-                  const std::vector<T>* V, T* v) const {
+  // mDBC: the density of boundary particle k (positions XK, ghost vectors GK) from the water (with the masses
+  // and the 1/rho this evaluation computed) round its ghost node, and round the node's image across a
+  // symmetry plane; 0 where that water is too little (sph::ghost_density). With `slip`, also the velocity the
+  // particle shows the water in the slip mode (into v; where the density is not 0).
+  T ghost_density(const sph::NeighbourView<D, T>& water, const std::vector<T>* XK, const std::vector<T>* GK,
+                  size_t k, bool slip, T* v) const {
     T g[D], gv[D];
     for (int d = 0; d < D; ++d) {
       gv[d] = GK[d][k];
       g[d] = XK[d][k] + gv[d];
     }
-    sph::NeighbourView<D, T> water;
-    for (int d = 0; d < D; ++d) {
-      water.x[d] = X[d].data();
-      if (V) water.v[d] = V[d].data();
-    }
-    water.mass = mass_.data();
-    water.inv_rho = irf_.data();
     auto gather = [&](const T* at, sph::GhostSums<D, T>& S) {
       auto ranges = [&](const auto& f) {
         sph::for_each_neighbour_range<D>(grid_, fluid_list_, at, search_, f);
       };
-      if (V)
+      if (slip)
         sph::gather_ghost<D, T, true>(P_, water, at, ranges, S);
       else
         sph::gather_ghost<D, T, false>(P_, water, at, ranges, S);
@@ -898,7 +890,7 @@ class SphSolver final : public Simulation {
       sph::add_reflected_ghost(mirror_.axis, M, S);
     }
     const T rho = sph::ghost_density<D, T>(S, gv, P_.rho0);
-    if (V && rho > T(0)) {
+    if (slip && rho > T(0)) {
       T vw[D];
       for (int d = 0; d < D; ++d) vw[d] = vw_[d][k];
       sph::ghost_slip_velocity<D, T>(slip_, S, gv, vw, v);
