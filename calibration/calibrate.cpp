@@ -582,4 +582,42 @@ int run_calibration(const CalibrationSpec& spec, const CalibrateOptions& options
   return kExitOk;
 }
 
+int evaluate_points(const CalibrationSpec& spec, const std::string& db_file, const std::string& phase,
+                    int round, const std::vector<std::vector<double>>& points, int workers) {
+  store::CampaignStore db(db_file);  // the writer lock first
+  const auto existing = db.find_campaign(spec.name);
+  if (!existing) throw InputError(db_file, "--calibration", "no calibration named '" + spec.name + "'");
+  // `spec` is the stored one parsed back (parse_stored_calibration_spec): its targets checked against their
+  // stored content, its run settings the defaults (the store keeps the identity, not how runs were run).
+  db.prepare_resume(existing->id, {});
+  g_signal = 0;
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, on_signal);
+  Evaluator evaluator(spec, db, existing->id, db_file);
+  evaluator.set_stop_check([] { return g_signal != 0; });
+  CalibrateOptions options;
+  options.db_file = db_file;
+  options.workers = workers;
+  Driver driver(spec, options, evaluator, existing->id);
+  bool stopped = false;
+  try {
+    driver.parallel(static_cast<int>(points.size()), [&](int i) {
+      std::vector<double> u;
+      for (size_t j = 0; j < spec.parameters.size(); ++j)
+        u.push_back(spec.parameters[j].to_unit(points[static_cast<size_t>(i)].at(j)));
+      driver.evaluate(u, phase, round, i);
+    });
+  } catch (const Stopped&) {
+    stopped = true;
+  }
+  std::signal(SIGINT, SIG_DFL);
+  std::signal(SIGTERM, SIG_DFL);
+  if (stopped || g_signal) {
+    std::fprintf(stderr, "flume surrogate posterior: stopped%s; run the same command again to resume\n",
+                 g_signal ? (" by signal " + std::to_string(g_signal.load())).c_str() : "");
+    return g_signal ? 128 + g_signal : kExitInternal;
+  }
+  return kExitOk;
+}
+
 }  // namespace flume::calibration

@@ -17,6 +17,7 @@
 #include "surrogate/multilevel_command.h"
 #include "surrogate/ot_models.h"
 #include "surrogate/posterior.h"
+#include "surrogate/posterior_refine.h"
 #include "surrogate/series_posterior.h"
 #include "surrogate/stored.h"
 
@@ -28,30 +29,44 @@ using surrogate::Kind;
 
 const char* kUsage =
     "usage:\n"
-    "  flume surrogate fit --db FILE --campaign NAME --metric M[,M2...] [--kind chaos|kriging|both] [--degree D]\n"
-    "        [--folds K] [--holdout N | --validation CAMPAIGN] [--bootstrap B] [--thresholds t1,t2,...] [--seed S]\n"
+    "  flume surrogate fit --db FILE --campaign NAME --metric M[,M2...] [--kind chaos|kriging|both] "
+    "[--degree D]\n"
+    "        [--folds K] [--holdout N | --validation CAMPAIGN] [--bootstrap B] [--thresholds t1,t2,...] "
+    "[--seed S]\n"
     "        [--given METRIC] [--force]\n"
-    "        runs that lack the metric (or METRIC, such as a gauge's arrival) are left out of the fit, and a\n"
+    "        runs that lack the metric (or METRIC, such as a gauge's arrival) are left out of the fit, and "
+    "a\n"
     "        classifier of where it exists is fitted and validated beside it\n"
-    "  flume surrogate predict --db FILE --campaign NAME --metric M [--kind chaos|kriging] --at x1=v,x2=v [--at ...]\n"
-    "  flume surrogate sobol --db FILE --campaign NAME --metric M      first and total Sobol' indices (chaos)\n"
+    "  flume surrogate predict --db FILE --campaign NAME --metric M [--kind chaos|kriging] --at x1=v,x2=v "
+    "[--at ...]\n"
+    "  flume surrogate sobol --db FILE --campaign NAME --metric M      first and total Sobol' indices "
+    "(chaos)\n"
     "  flume surrogate show --db FILE --campaign NAME                  the stored surrogates and their Q2\n"
     "  flume surrogate adapt SPEC.json --db FILE --metric M [--batch B] [--max-runs N] [--target-q2 Q]\n"
     "        [--threshold T [--target-width W]] [--candidates C] [--folds K] [--workers N] [--seed S]\n"
     "        grow the campaign a batch at a time where the kriging is least sure\n"
     "  flume surrogate multilevel --db FILE --levels HIGH,MID,...,LOW --metric M[,M2...] [--cost S1,S2,...]\n"
     "  flume surrogate multilevel --db FILE --low NAME --high NAME --metric M [--cost-low S --cost-high S]\n"
-    "        mean of the highest-fidelity metric from nested campaigns (levels high to low fidelity; costs per\n"
-    "        run, default the mean wall times): multi-fidelity Monte Carlo (Peherstorfer et al. 2016) with the\n"
-    "        optimal weights and with unit weights, two levels also by Giles' two-level Monte Carlo; each against\n"
+    "        mean of the highest-fidelity metric from nested campaigns (levels high to low fidelity; costs "
+    "per\n"
+    "        run, default the mean wall times): multi-fidelity Monte Carlo (Peherstorfer et al. 2016) with "
+    "the\n"
+    "        optimal weights and with unit weights, two levels also by Giles' two-level Monte Carlo; each "
+    "against\n"
     "        high runs alone for the same variance, and the optimal allocation\n"
     "  flume surrogate posterior --db FILE --calibration NAME --noise-m SIGMA [--surrogate series|misfit]\n"
     "        [--neighbourhood D] [--samples N] [--seed S] [--draws K --draws-out SPEC.json [--end-time S]]\n"
-    "        posterior of a calibration's parameters by MCMC on an emulator of its gauge series (default: the\n"
-    "        records of the runs within D noises, default 1, of the best's, by principal components and kriging,\n"
-    "        its leave-one-out error added to the noise) or on a kriging of its misfit (--surrogate misfit);\n"
+    "        [--refine K [--rounds R] [--workers N]]\n"
+    "        posterior of a calibration's parameters by MCMC on an emulator of its gauge series (default: "
+    "the\n"
+    "        records of the runs within D noises, default 1, of the best's, by principal components and "
+    "kriging,\n"
+    "        its leave-one-out error added to the noise) or on a kriging of its misfit (--surrogate "
+    "misfit);\n"
     "        with --draws, a campaign spec of K posterior draws whose runs give the predictive band (flume\n"
-    "        gauges --band)\n";
+    "        gauges --band); with --refine, first R rounds (default 1) that each run K draws of the "
+    "posterior\n"
+    "        as evaluations of the calibration, so that the emulator knows the region the posterior claims\n";
 
 struct Args {
   std::string verb, db, campaign;
@@ -73,6 +88,7 @@ struct Args {
   bool has_neighbourhood = false;
   std::string draws_out;
   double end_time = 0;
+  surrogate::RefineSettings refine;
 };
 
 std::vector<std::string> split(const std::string& s, char sep) {
@@ -174,6 +190,10 @@ Args parse_args(int argc, char** argv) {
       a.posterior.draws = parse_count(s, value(), 2, 10000);
     } else if (s == "--draws-out") {
       a.draws_out = value();
+    } else if (s == "--refine") {
+      a.refine.points = parse_count(s, value(), 2, 1000);
+    } else if (s == "--rounds") {
+      a.refine.rounds = static_cast<int>(parse_count(s, value(), 1, 100));
     } else if (s == "--end-time") {
       a.end_time = parse_number(s, value(), 1e-3, 1e4);
     } else if (s == "--samples") {
@@ -354,6 +374,12 @@ int posterior(Args a) {
   const bool series = a.posterior_surrogate == "series";
   if (!series && a.has_neighbourhood)
     throw InputError("command line", "--neighbourhood", "goes with the series emulator, not --surrogate misfit");
+  if (a.refine.points > 0) {
+    a.refine.series = series;
+    a.refine.workers = a.adapt.workers;
+    const int rc = surrogate::refine_posterior(a.db, a.calibration, a.posterior, a.refine);
+    if (rc != 0) return rc;
+  }
   surrogate::SeriesData series_data;
   surrogate::MisfitData misfit_data;
   if (series)

@@ -69,7 +69,7 @@ Posterior misfit_posterior(const MisfitData& d, const PosteriorSettings& s) {
   return out;
 }
 
-MisfitData load_calibration_misfit(const std::string& db_file, const std::string& name) {
+MisfitData load_calibration_misfit(const std::string& db_file, const std::string& name, int rounds_before) {
   using json = nlohmann::json;
   store::CampaignStore db(db_file, /*read_only=*/true);
   const auto c = db.find_campaign(name);
@@ -91,6 +91,7 @@ MisfitData load_calibration_misfit(const std::string& db_file, const std::string
   }
   std::map<std::vector<double>, double> unique;  // a point evaluated twice (replayed) counts once
   for (const auto& e : db.evaluations(c->id)) {
+    if (e.phase == kRefinePhase && e.start >= rounds_before) continue;
     const json params = json::parse(e.params_json), terms = json::parse(e.terms_json);
     if (terms.contains("failed") || !terms.contains("rms_m") || !terms["rms_m"].is_number()) continue;
     double n = 0;

@@ -71,9 +71,15 @@ inline std::size_t posterior_min_evaluations(std::size_t p) { return (p + 1) * (
 
 Posterior misfit_posterior(const MisfitData& data, const PosteriorSettings& settings);
 
-// The stored evaluations of calibration `name` (flume calibrate): failed evaluations are left out. Throws
-// flume::InputError naming the file for an unknown calibration or too few evaluations.
-MisfitData load_calibration_misfit(const std::string& db_file, const std::string& name);
+// The phase of the evaluations the posterior's refinement adds (posterior_refine.h), their start its round.
+inline constexpr const char* kRefinePhase = "refine";
+inline constexpr int kAllRounds = 1 << 30;
+
+// The stored evaluations of calibration `name` (flume calibrate), with the refinement's of rounds before
+// `rounds_before`: failed evaluations are left out. Throws flume::InputError naming the file for an unknown
+// calibration or too few evaluations.
+MisfitData load_calibration_misfit(const std::string& db_file, const std::string& name,
+                                   int rounds_before = kAllRounds);
 
 // The predictive runs: a campaign spec (list design, docs/campaign-spec.md) of the optimum (the best
 // evaluation, labelled "optimum") and the posterior draws ("draw-001", ...) on the

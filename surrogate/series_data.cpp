@@ -14,7 +14,7 @@
 
 namespace flume::surrogate {
 
-SeriesData load_calibration_series(const std::string& db_file, const std::string& name) {
+SeriesData load_calibration_series(const std::string& db_file, const std::string& name, int rounds_before) {
   using json = nlohmann::json;
   namespace fs = std::filesystem;
   store::CampaignStore db(db_file, /*read_only=*/true);
@@ -42,6 +42,7 @@ SeriesData load_calibration_series(const std::string& db_file, const std::string
   // A point evaluated twice (replayed) counts once.
   std::map<std::vector<double>, std::vector<double>> unique;
   for (const auto& e : db.evaluations(c->id)) {
+    if (e.phase == kRefinePhase && e.start >= rounds_before) continue;
     const json params = json::parse(e.params_json), terms = json::parse(e.terms_json);
     if (terms.contains("failed") || !terms.contains("rms_m") || !terms["rms_m"].is_number()) continue;
     std::vector<double> x, run_values;

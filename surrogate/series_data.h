@@ -17,9 +17,11 @@ struct SeriesData : CalibrationBox {
   double n_residuals = 0;  // sum_g w_g n_g: SSR / n_residuals is the stored RMS^2
 };
 
-// Failed evaluations are left out, and a point evaluated twice counts once. Throws flume::InputError naming
-// the file for an unknown calibration, a target record changed since, a run whose result.h5 is gone or no
-// longer gives the misfit the store has for it, or too few evaluations.
-SeriesData load_calibration_series(const std::string& db_file, const std::string& name);
+// The refinement's evaluations of rounds before `rounds_before` only. Failed evaluations are left out, and a
+// point evaluated twice counts once. Throws flume::InputError naming the file for an unknown calibration, a
+// target record changed since, a run whose result.h5 is gone or no longer gives the misfit the store has for
+// it, or too few evaluations.
+SeriesData load_calibration_series(const std::string& db_file, const std::string& name,
+                                   int rounds_before = kAllRounds);
 
 }  // namespace flume::surrogate

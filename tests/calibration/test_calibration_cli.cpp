@@ -233,6 +233,53 @@ TEST(CalibrateTwin, BobyqaRecoversTwoParametersFromADistantStart) {
   }
 }
 
+// Issue 27 item 4: a calibration stopped after 12 optimizer evaluations leaves the truth between its path and
+// its profile steps, where the series emulator extrapolates and the posterior misses it. The refinement runs
+// posterior draws as evaluations, round after round, and the posterior then holds the truth; the same command
+// again replays the rounds from the store and runs nothing.
+TEST(CalibrateTwin, PosteriorRefinementRunsDrawsUntilTheEmulatorKnowsThePosteriorsRegion) {
+  const fs::path dir = test_dir();
+  make_target(dir, {"reservoir.forcing.t99_s=0.8", "reservoir.gate_height_m=0.085"}, 0, 5);
+  write_file(dir / "spec.json",
+             two_parameter_spec("short", R"({"name": "BOBYQA", "max_evaluations": 12})", ""));
+  const fs::path db = dir / "study.db";
+  ASSERT_EQ(run(flume_cmd({"calibrate", (dir / "spec.json").string(), "--db", db.string(), "--out",
+                           (dir / "out").string(), "--workers", "2"}),
+                dir)
+                .rc,
+            0);
+  auto holds = [](const std::string& out) {
+    bool all = true;
+    for (const auto& [path, truth] : {std::pair{kT99Path, kT99}, std::pair{kGatePath, kGate}}) {
+      const auto [lo, hi] = posterior_interval(out, path);
+      all = all && lo <= truth && truth <= hi;
+    }
+    return all;
+  };
+  const std::vector<std::string> plain =
+      flume_cmd({"surrogate", "posterior", "--db", db.string(), "--calibration", "short", "--noise-m",
+                 std::to_string(kNoise_m)});
+  const Result p0 = run(plain, dir);
+  ASSERT_EQ(p0.rc, 0) << p0.err;
+  EXPECT_FALSE(holds(p0.out)) << "the case no longer needs refinement:\n" << p0.out;
+
+  std::vector<std::string> refined = plain;
+  refined.insert(refined.end(), {"--refine", "8", "--rounds", "2", "--workers", "2"});
+  const Result p1 = run(refined, dir);
+  ASSERT_EQ(p1.rc, 0) << p1.err;
+  std::printf("%s", p1.out.c_str());
+  EXPECT_TRUE(holds(p1.out)) << p1.out;
+  EXPECT_NE(p1.out.find("# refine round 2"), std::string::npos) << p1.out;
+  EXPECT_EQ(scalar(db, "SELECT count(*) FROM evaluations WHERE phase = 'refine' AND start = 1"), "8");
+  EXPECT_EQ(scalar(db, "SELECT count(*) FROM evaluations WHERE phase = 'refine' AND start = 2"), "8");
+
+  const std::string runs = scalar(db, "SELECT count(*) FROM runs");
+  const Result p2 = run(refined, dir);
+  ASSERT_EQ(p2.rc, 0) << p2.err;
+  EXPECT_EQ(scalar(db, "SELECT count(*) FROM runs"), runs) << "a replayed round ran its draws again";
+  EXPECT_EQ(p2.out, p1.out);
+}
+
 // Issue 6 point 1: the global algorithm (CRS2_LM, polished by BOBYQA) from three starts finds the same
 // optimum.
 TEST(CalibrateTwin, GlobalAlgorithmFromThreeStartsFindsTheSameOptimum) {
