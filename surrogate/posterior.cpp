@@ -69,6 +69,15 @@ Posterior misfit_posterior(const MisfitData& d, const PosteriorSettings& s) {
   return out;
 }
 
+double noise_alone_rms_ratio(double n_residuals, double level) {
+  const double n = std::max(1.0, std::round(n_residuals));
+  try {
+    return std::sqrt(OT::ChiSquare(n).computeQuantile(level)[0] / n);
+  } catch (const OT::Exception& e) {
+    detail::rethrow(e);
+  }
+}
+
 MisfitData load_calibration_misfit(const std::string& db_file, const std::string& name, int rounds_before) {
   using json = nlohmann::json;
   store::CampaignStore db(db_file, /*read_only=*/true);

@@ -65,6 +65,11 @@ struct Posterior {
   std::vector<std::vector<double>> draws;  // in the parameters' units, `names` order
 };
 
+// The largest best-fit RMS, as a multiple of the noise sigma, that noise alone gives over n independent
+// residuals at `level` (n RMS^2 / sigma^2 is chi-square with n degrees of freedom): beyond it the residual is
+// not the noise the likelihood assumes (model error, or an optimizer stopped in a local minimum).
+double noise_alone_rms_ratio(double n_residuals, double level);
+
 // The evaluations a misfit surrogate of p parameters needs: a quadratic's (p + 1)(p + 2) / 2 coefficients and
 // p + 1 more for the kriging of what it leaves.
 inline std::size_t posterior_min_evaluations(std::size_t p) { return (p + 1) * (p + 2) / 2 + p + 1; }

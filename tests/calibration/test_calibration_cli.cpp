@@ -262,6 +262,9 @@ TEST(CalibrateTwin, PosteriorRefinementRunsDrawsUntilTheEmulatorKnowsThePosterio
   const Result p0 = run(plain, dir);
   ASSERT_EQ(p0.rc, 0) << p0.err;
   EXPECT_FALSE(holds(p0.out)) << "the case no longer needs refinement:\n" << p0.out;
+  // The best of the 32 scores 1.5 sigma, beyond what noise alone gives over 501 residuals (1.1 sigma):
+  // warned.
+  EXPECT_NE(p0.out.find("the residual is not the noise alone"), std::string::npos) << p0.out;
 
   std::vector<std::string> refined = plain;
   refined.insert(refined.end(), {"--refine", "8", "--rounds", "2", "--workers", "2"});
@@ -269,6 +272,7 @@ TEST(CalibrateTwin, PosteriorRefinementRunsDrawsUntilTheEmulatorKnowsThePosterio
   ASSERT_EQ(p1.rc, 0) << p1.err;
   std::printf("%s", p1.out.c_str());
   EXPECT_TRUE(holds(p1.out)) << p1.out;
+  EXPECT_EQ(p1.out.find("the residual is not the noise alone"), std::string::npos) << p1.out;
   EXPECT_NE(p1.out.find("# refine round 2"), std::string::npos) << p1.out;
   EXPECT_EQ(scalar(db, "SELECT count(*) FROM evaluations WHERE phase = 'refine' AND start = 1"), "8");
   EXPECT_EQ(scalar(db, "SELECT count(*) FROM evaluations WHERE phase = 'refine' AND start = 2"), "8");
@@ -538,6 +542,8 @@ TEST(CalibrateInputs, UnwritableOutFolderIsRefusedBeforeAnyRun) {
   EXPECT_EQ(r.rc, 2) << r.err;
   EXPECT_NE(r.err.find(out + ": --out: "), std::string::npos) << r.err;
   EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
-  if (fs::exists(dir / "s.db")) EXPECT_EQ(scalar(dir / "s.db", "SELECT count(*) FROM runs"), "0");
+  if (fs::exists(dir / "s.db")) {
+    EXPECT_EQ(scalar(dir / "s.db", "SELECT count(*) FROM runs"), "0");
+  }
   EXPECT_FALSE(fs::exists(dir / "s.db.runs" / "out" / "run-000000"));
 }
