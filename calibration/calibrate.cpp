@@ -590,6 +590,9 @@ int evaluate_points(const CalibrationSpec& spec, const std::string& db_file, con
   // `spec` is the stored one parsed back (parse_stored_calibration_spec): its targets checked against their
   // stored content, its run settings the defaults (the store keeps the identity, not how runs were run).
   db.prepare_resume(existing->id, {});
+  // This round replaces any made before with other settings (fewer points would leave stale ones), and the
+  // rounds after it, which followed from it.
+  db.delete_evaluations(existing->id, phase, round);
   g_signal = 0;
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);

@@ -75,9 +75,9 @@ struct CalibrationResult {
 int run_calibration(const CalibrationSpec& spec, const CalibrateOptions& options, CalibrationResult& result);
 
 // Runs `points` (physical values, spec parameter order) as evaluations of the calibration already in the
-// store, recorded as (phase, round, index): the posterior's refinement (flume surrogate posterior --refine).
-// A point already run is read back; the same call again replaces its evaluations with the same ones. Returns
-// 0, or 128 + signal when stopped.
+// store, recorded as (phase, round, index), after removing that phase's evaluations of this round and later:
+// the posterior's refinement (flume surrogate posterior --refine). A point already run is read back; the same
+// call again records the same evaluations. Returns 0, or 128 + signal when stopped.
 int evaluate_points(const CalibrationSpec& spec, const std::string& db_file, const std::string& phase,
                     int round, const std::vector<std::vector<double>>& points, int workers);
 

@@ -622,6 +622,14 @@ void CampaignStore::record_evaluation(std::int64_t campaign, const Evaluation& e
   t.commit();
 }
 
+void CampaignStore::delete_evaluations(std::int64_t campaign, const std::string& phase,
+                                       std::int64_t from_start) {
+  Transaction t(db_);
+  Stmt s(db_, "DELETE FROM evaluations WHERE campaign = ?1 AND phase = ?2 AND start >= ?3");
+  s.bind(1, campaign).bind(2, phase).bind(3, from_start).run();
+  t.commit();
+}
+
 std::vector<Evaluation> CampaignStore::evaluations(std::int64_t campaign) {
   Stmt s(db_,
          "SELECT phase, start, seq, coalesce(run, 0), params, value, coalesce(terms, '{}') FROM evaluations "

@@ -195,6 +195,8 @@ class CampaignStore {
   // Marks that run `running` as claim_next does; it must be pending.
   RunTicket claim_run(std::int64_t run_id, const std::string& host, const std::string& worker);
   void record_evaluation(std::int64_t campaign, const Evaluation& e);
+  // Removes the evaluations of `phase` whose start is `from_start` or later (their runs stay).
+  void delete_evaluations(std::int64_t campaign, const std::string& phase, std::int64_t from_start);
   std::vector<Evaluation> evaluations(std::int64_t campaign);
 
   // Writes a surrogate, replacing the one of the same campaign, metric and kind, in one transaction.
