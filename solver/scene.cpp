@@ -42,8 +42,8 @@ constexpr std::size_t kMaxSceneJsonBytes = 60000;
 constexpr int kHardMaxParticles = 2000000000;
 constexpr double kMaxCellsPerAxis = 4.0e6;         // block keys pack 21 bits per axis (2^21 blocks of 4 cells)
 
-// Particles seeded per box (seed_water in solver/seeding.h: lround(L / spacing) per axis, at least 1), in
-// double so that a dx of 1e-9 m cannot overflow the count.
+// Particles seeded per box (seed_water in solver/seeding.h: at most ceil(L / spacing) per axis, at least 1),
+// in double so that a dx of 1e-9 m cannot overflow the count.
 void check_allocation_bounds(const Scene& sc, Reader& root, int dim) {
   const auto& s = sc.solver;
   const double per_axis = std::round(std::pow(s.ppc, 1.0 / dim));
@@ -68,7 +68,7 @@ void check_allocation_bounds(const Scene& sc, Reader& root, int dim) {
                                    ", under half a particle spacing (0.5 dx / ppc^(1/D) = " + fmt(0.5 * spacing) +
                                    " m); allowed: dx <= " +
                                    fmt(2 * per_axis * (sc.water[w].hi[d] - sc.water[w].lo[d])) + " m");
-      n *= std::max(1.0, std::round(along));
+      n *= std::max(1.0, std::ceil(along));
     }
     total += n;
   }

@@ -1,12 +1,17 @@
-// The particles a scene starts with, for both backends (MpmSolver and the CUDA solver): a regular lattice of
-// ppc^(1/D) particles per cell per axis in each water box, hydrostatically preloaded where the box asks, and
-// flagged where the reservoir's vacuum holds the water. Host code, header-only so that the CUDA library needs
-// nothing from the solver library.
+// The particles a scene starts with, for both backends (MpmSolver and the CUDA solver) and SPH: a regular
+// lattice of ppc^(1/D) particles per cell per axis in each water box, hydrostatically preloaded where the box
+// asks, and flagged where the reservoir's vacuum holds the water. Host code, header-only so that the CUDA
+// library needs nothing from the solver library.
 //
-// A box that is not a whole number of spacings long on an axis gets lround(L / spacing) particles there,
-// stretched to fit, so each particle carries the box's volume over its particles, prod (hi - lo) / count, not
-// spacing^D: every box then holds rho times its volume (at dx = 0.04 m the Waseda basin's 0.23 m, 11.5
-// spacings seeded as 12, held 4.6 % too much water with spacing^D).
+// A box that is not a whole number of spacings long on an axis still holds rho times its volume; how the
+// lattice fits it (Lattice):
+//   kAnchored   (MPM) rows a spacing apart from the box's low face, the last row only as thick as what is
+//               left, its particle at that slab's middle with that slab's volume. The seeds then move
+//               continuously with the box's faces: a face crossing a row boundary starts a row of zero
+//               volume. Stretching jumped there (the gate's gap at 8.5 spacings went from 8 rows to 9, and
+//               WG1's record at gate 0.085 m by 8 mm RMS for 1e-6 m of gate; docs/calibration.md).
+//   kStretched  (SPH, whose kernel sums want one particle spacing and one mass) lround(L / spacing) rows
+//               stretched to fit, each carrying the box's volume over its particles.
 #pragma once
 #include <cmath>
 #include <cstdint>
@@ -16,6 +21,40 @@
 #include "solver/scene.h"
 
 namespace flume {
+
+enum class Lattice { kAnchored, kStretched };
+
+// The rows of a box `length` long on one axis: row i's centre lies `centre` from the low face, `width` thick.
+struct LatticeRows {
+  long count = 0;
+  double pitch = 0;  // the full rows' width and spacing
+  double last = 0;   // the last row's width (pitch unless kAnchored cuts it)
+
+  double centre(long i) const { return i + 1 < count ? (i + 0.5) * pitch : (count - 1) * pitch + 0.5 * last; }
+  double width(long i) const { return i + 1 < count ? pitch : last; }
+};
+
+inline LatticeRows lattice_rows(double length, double spacing, Lattice lattice) {
+  LatticeRows r;
+  if (lattice == Lattice::kStretched) {
+    r.count = std::max(1L, std::lround(length / spacing));
+    r.pitch = r.last = length / r.count;
+    return r;
+  }
+  // A length within round-off of a whole number of spacings is that number: no sliver row.
+  const double q = length / spacing;
+  long whole = static_cast<long>(std::floor(q + 1e-9));
+  double rest = length - whole * spacing;
+  if (rest <= 1e-9 * spacing) rest = 0;
+  if (whole == 0) {
+    whole = 1;
+    rest = length;
+  }
+  r.pitch = spacing;
+  r.count = whole + (rest > 0 ? 1 : 0);
+  r.last = rest > 0 ? rest : spacing;
+  return r;
+}
 
 struct Seeds {
   std::vector<double> x[3];    // positions, D axes used
@@ -28,27 +67,28 @@ struct Seeds {
 
 // `displaced(p)`: true where a solid (a debris box) takes the place of the water, which is then not seeded.
 template <int D>
-Seeds seed_water(const Scene& scene, double spacing, const std::function<bool(const double*)>& displaced = {}) {
+Seeds seed_water(const Scene& scene, double spacing, const std::function<bool(const double*)>& displaced = {},
+                 Lattice lattice = Lattice::kAnchored) {
   Seeds s;
   const auto& B = scene.basin;
   const bool forced = B.present && B.forcing.model != ForcingModel::kNone;
   for (std::size_t w = 0; w < scene.water.size(); ++w) {
     const auto& box = scene.water[w];
-    long count[D];
-    for (int d = 0; d < D; ++d) count[d] = std::max(1L, std::lround((box.hi[d] - box.lo[d]) / spacing));
+    LatticeRows rows[D];
     long total = 1;
-    double volume = 1;  // the box's volume per lattice site
     for (int d = 0; d < D; ++d) {
-      total *= count[d];
-      volume *= (box.hi[d] - box.lo[d]) / count[d];
+      rows[d] = lattice_rows(box.hi[d] - box.lo[d], spacing, lattice);
+      total *= rows[d].count;
     }
     for (long k = 0; k < total; ++k) {
       long r = k;
       double p[D];
+      double volume = 1;
       for (int d = D - 1; d >= 0; --d) {
-        const long idx = r % count[d];
-        r /= count[d];
-        p[d] = box.lo[d] + (idx + 0.5) * (box.hi[d] - box.lo[d]) / count[d];
+        const long idx = r % rows[d].count;
+        r /= rows[d].count;
+        p[d] = box.lo[d] + rows[d].centre(idx);
+        volume *= rows[d].width(idx);
       }
       // Overlapping water boxes would double the water: keep a point only for its first box.
       bool dup = false;

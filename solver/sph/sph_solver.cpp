@@ -376,7 +376,7 @@ class SphSolver final : public Simulation {
       if (scene_.boundaries[k].roughness > 0)
         throw InputError(scene_.file, "boundaries." + std::to_string(k) + ".roughness_m",
                          "SPH has no bed stress: set it to 0 or run with solver.method mpm");
-    const Seeds seeds = seed_water<D>(scene_, spacing_, displaced_by<D>(debris_.get()));
+    const Seeds seeds = seed_water<D>(scene_, spacing_, displaced_by<D>(debris_.get()), Lattice::kStretched);
     n_ = seeds.size();
     if (n_ == 0) throw InputError(scene_.file, "water", "no water to simulate");
     if (n_ > std::numeric_limits<uint32_t>::max() / 2)

@@ -43,7 +43,7 @@ inline Scene free_blob(int dim, double dx, double half, double bulk_modulus = 2.
 
 // The angular momentum about the origin of the scene's single water box turning rigidly at omega about its
 // own centre (Simulation::set_rigid_velocity with v0 = 0), from the lattice the box is seeded with
-// (solver/seeding.h: n = lround(L / spacing) particles per axis, spacing L / n, cell-centred), of total mass
+// (solver/seeding.h; the box a whole number n of spacings h long on each axis, asserted), of total mass
 // M:
 //  - orbital: sum m r x (omega x r) = I omega, with the lattice's inertia I_aa = sum_{b != a} S_b, where
 //    S_b = M (L_b^2 - h_b^2) / 12 is the second moment of n equally spaced points (the box's L^2/12, less the
@@ -59,6 +59,7 @@ inline void rigid_box_angular_momentum(const Scene& scene, double M, const doubl
   for (int d = 0; d < D; ++d) {
     const double len = box.hi[d] - box.lo[d];
     const double h = len / std::max(1L, std::lround(len / spacing));
+    EXPECT_NEAR(h, spacing, 1e-12) << "the formula is the whole lattice's";
     S[d] = M * (len * len - h * h) / 12;
   }
   const double spin = M * scene.solver.dx * scene.solver.dx / 2;

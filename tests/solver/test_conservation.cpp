@@ -93,11 +93,11 @@ TEST(Conservation, CudaMassIsExactThroughADamBreak) {
   expect_mass_exact_through_a_dam_break(gpu);
 }
 
-// A water box whose sides are not whole particle spacings (dx 0.04 m, spacing 0.02 m: 6.5 x 5 x 11.5 spacings,
-// seeded as 7 x 5 x 12 particles stretched to fit) carries rho times its volume: each particle's reference
-// volume is the box's volume over its particles, so the total does not depend on the rounding of L / spacing
-// (with rho spacing^D per particle it carried 7 x 12 / (6.5 x 11.5) = 12 % too much in 2D). In double the
-// total is exact to the round-off of summing n volumes; in float each volume is rounded once to 6e-8.
+// A water box whose sides are not whole particle spacings (dx 0.04 m, spacing 0.02 m: 6.5 x 5 x 11.5
+// spacings, seeded as 7 x 5 x 12 particles, the last row on the odd axes half as thick) carries rho times its
+// volume: each particle's reference volume is its own slab of the box (with rho spacing^D per particle it
+// carried 7 x 12 / (6.5 x 11.5) = 12 % too much in 2D). In double the total is exact to the round-off of
+// summing n volumes; in float each volume is rounded once to 6e-8.
 TEST(Conservation, SeededMassIsRhoTimesTheBoxVolume) {
   for (int dim : {2, 3})
     for (const char* precision : {"double", "float"}) {

@@ -14,6 +14,7 @@
 #include "common/errors.h"
 #include "solver/instruments.h"
 #include "solver/scene.h"
+#include "solver/seeding.h"
 #include "solver/simulation.h"
 #include "test_util.h"
 
@@ -101,17 +102,17 @@ double lattice_alias(double dx, double sx) {
 }
 
 // The seeding (solver/seeding.h) at dx = 0.04 m: the basin's 0.23 m of still water is 11.5 particle spacings
-// (0.02 m) and its 3.91 m 195.5, seeded as 12 x 196 particles stretched to fit. The particles carry the box's
-// volume between them, so every gauge over the basin reads the still-water level at t = 0 (with rho spacing^2
-// each they held 4.6 % too much water and read +10.6 mm).
-// Tolerance, from the gauge's method (gauge_elevation): it reads the volume sum_i w_i V_i / dx of the water
-// over its footprint, w_i the B-spline weight of particle i's distance from the gauge. The seeded columns, sx
-// apart, each hold the depth H (their particles' volumes sum to sx H), so the gauge reads
-// H (sx / dx) sum_j B((x_j - x_g) / dx): H exactly when dx / sx is whole, else off by the lattice sum's
-// deviation from dx / sx, at most its largest over the lattice's phase (lattice_alias). Round-off adds the
-// float positions, within delta = 2.4e-7 m of the lattice (half an ulp at 4 m < x < 8 m), which move the
-// weights' sum by at most delta / dx times B's total variation 1.5 (|B'| summed over columns sx apart, times
-// sx / dx), bounded by 2 H delta / dx; and the float volumes, 6e-8 relative.
+// (0.02 m) and its 3.91 m 195.5, seeded as 12 x 196 rows and columns a spacing apart, the last of each half
+// as thick and carrying half the volume, so every gauge over the basin reads the still-water level at t = 0
+// (with rho spacing^2 each they held 4.6 % too much water and read +10.6 mm). Tolerance, from the gauge's
+// method (gauge_elevation): it reads the volume sum_i w_i V_i / dx of the water over its footprint, w_i the
+// B-spline weight of particle i's distance from the gauge. The seeded columns, sx apart, each hold the depth
+// H (their particles' volumes sum to sx H), so the gauge reads H (sx / dx) sum_j B((x_j - x_g) / dx): H
+// exactly when dx / sx is whole, else off by the lattice sum's deviation from dx / sx, at most its largest
+// over the lattice's phase (lattice_alias). Round-off adds the float positions, within delta = 2.4e-7 m of
+// the lattice (half an ulp at 4 m < x < 8 m), which move the weights' sum by at most delta / dx times B's
+// total variation 1.5 (|B'| summed over columns sx apart, times sx / dx), bounded by 2 H delta / dx; and the
+// float volumes, 6e-8 relative.
 TEST(Waseda, BasinGaugesReadStillWaterAtStart) {
   const Scene scene = load_scene(kScene, {{"solver.dx", "0.04"}, {"solver.end_time", "0.01"}});
   auto sim = make_simulation(scene, {});
@@ -124,7 +125,8 @@ TEST(Waseda, BasinGaugesReadStillWaterAtStart) {
     for (const auto& w : scene.water)
       if (w.lo[0] <= xg - 1.5 * dx && xg + 1.5 * dx <= w.hi[0] && std::fabs(w.hi[1] - H) < 1e-12) box = &w;
     if (!box) continue;
-    const double sx = (box->hi[0] - box->lo[0]) / std::max(1L, std::lround((box->hi[0] - box->lo[0]) / s));
+    const double sx =
+        lattice_rows(box->hi[0] - box->lo[0], s, Lattice::kAnchored).pitch;  // under the footprint
     const double alias = lattice_alias(dx, sx);
     const double delta = std::ldexp(1.0, -22);  // half an ulp of a float in [4, 8)
     const double tol = H * (alias + 2 * delta / dx + 6e-8);
@@ -156,7 +158,7 @@ TEST(Waseda, GaugeBesideTheSymmetryPlaneReadsStillWaterAtStart) {
     if (w.lo[0] <= g.position[0] - 1.5 * dx && g.position[0] + 1.5 * dx <= w.hi[0] && std::fabs(w.hi[2] - H) < 1e-12)
       box = &w;
   ASSERT_NE(box, nullptr);
-  const double sx = (box->hi[0] - box->lo[0]) / std::max(1L, std::lround((box->hi[0] - box->lo[0]) / s));
+  const double sx = lattice_rows(box->hi[0] - box->lo[0], s, Lattice::kAnchored).pitch;
   const double alias = lattice_alias(dx, sx);
   const double delta = std::ldexp(1.0, -23);  // half an ulp of a float in [1, 4): x = 1.85, y = 2
   const double tol = H * (alias + 2 * 2 * delta / dx + 6e-8);  // both axes' round-off
