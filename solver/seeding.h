@@ -8,8 +8,8 @@
 //   kAnchored   (MPM) rows a spacing apart from the box's low face, the last row only as thick as what is
 //               left, its particle at that slab's middle with that slab's volume. The seeds then move
 //               continuously with the box's faces: a face crossing a row boundary starts a row of zero
-//               volume. Stretching jumped there (the gate's gap at 8.5 spacings went from 8 rows to 9, and
-//               WG1's record at gate 0.085 m by 8 mm RMS for 1e-6 m of gate; docs/calibration.md).
+//               volume, where stretching jumped by a row (calibrated gate heights and fill levels cross such
+//               boundaries; docs/solver.md, "Seeding a box").
 //   kStretched  (SPH, whose kernel sums want one particle spacing and one mass) lround(L / spacing) rows
 //               stretched to fit, each carrying the box's volume over its particles.
 #pragma once

@@ -131,10 +131,6 @@ TEST(GeometryTies, WholeAndHalfBasinDecisionsIgnoreTheLastBit) {
   }
 }
 
-}  // namespace
-
-namespace {
-
 // The seeds of waseda_2d at dx 0.02 m (ppc 4: spacing 0.01 m) with one scene value set.
 Seeds waseda_seeds(const std::string& key, double value, Lattice lattice) {
   char text[64];
@@ -169,8 +165,8 @@ double farthest_unmatched(const Seeds& a, const Seeds& b, double floor) {
 // which moved WG1's record by 8 mm RMS at dx 0.02 m (docs/calibration.md); the test shows the check can see
 // it.
 TEST(GeometryTies, SeededWaterMovesContinuouslyWithTheBoxesFaces) {
-  const double h = 1e-7, spacing = 0.01,
-               floor = 4 * h * spacing;  // a sliver's volume: 2 h by a spacing at most
+  // A sliver row's volume is at most 2 h by a spacing: `floor` sets such rows apart.
+  const double h = 1e-7, spacing = 0.01, floor = 4 * h * spacing;
   for (const auto& [key, value] :
        std::vector<std::pair<std::string, double>>{{"reservoir.gate_height_m", 0.085},
                                                    {"reservoir.gate_height_m", 0.08},
