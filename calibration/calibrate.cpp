@@ -90,16 +90,23 @@ class Driver {
         evaluator_(evaluator),
         campaign_(campaign),
         objective_(spec.objective, spec.targets, spec.file),
-        start_time_(Clock::now()) {}
+        start_time_(Clock::now()) {
+    for (double end : spec.objective.stage_end_s)
+      stages_.emplace_back(stage_objective(spec.objective, end), spec.targets, spec.file);
+  }
 
   struct Point {
-    ObjectiveTerms terms;
+    ObjectiveTerms terms;  // over the calibration's window
+    double optimized = 0;  // what the optimizer sees: the stage's objective in a window continuation
     std::shared_ptr<const RunResult> run;
     double shift = 0;
   };
 
-  // One evaluation at unit coordinates u, recorded in the store as (phase, start, seq).
-  Point evaluate(const std::vector<double>& u, const std::string& phase, int start, int seq) {
+  // One evaluation at unit coordinates u, recorded in the store as (phase, start, seq). Its terms are
+  // always the whole window's (the posterior and the report read them); a stage's own objective is kept
+  // beside them.
+  Point evaluate(const std::vector<double>& u, const std::string& phase, int start, int seq,
+                 const Objective* stage = nullptr) {
     std::vector<double> phys, run_values;
     double shift = 0;
     json params = json::object();
@@ -120,6 +127,14 @@ class Driver {
                    ? objective_.evaluate(pt.run->gauges, shift)
                    : objective_.failure(std::string("run ") + store::to_string(pt.run->status) + ": " +
                                         pt.run->message);
+    pt.optimized = pt.terms.value;
+    json terms = terms_json(pt.terms);
+    if (stage) {
+      pt.optimized = pt.run->status == store::RunStatus::kOk ? stage->evaluate(pt.run->gauges, shift).value
+                                                             : stage->failure(pt.run->message).value;
+      terms["stage"] = {{"window_s", {stage->window_start_s(), stage->window_end_s()}},
+                        {"objective", pt.optimized}};
+    }
     store::Evaluation e;
     e.phase = phase;
     e.start = start;
@@ -127,7 +142,7 @@ class Driver {
     e.run = pt.run->run_id;
     e.params_json = params.dump();
     e.value = pt.terms.value;
-    e.terms_json = terms_json(pt.terms).dump();
+    e.terms_json = terms.dump();
     evaluator_.with_store([&](store::CampaignStore& db) { db.record_evaluation(campaign_, e); });
     report_progress(e, pt);
     return pt;
@@ -160,10 +175,12 @@ class Driver {
 
   // The objective NLopt calls: stops by throwing forced_stop, keeps any other error to rethrow after.
   struct Context {
-    Context(Driver* d, std::string ph, int s) : driver(d), phase(std::move(ph)), start(s) {}
+    Context(Driver* d, std::string ph, int s, const Objective* st = nullptr)
+        : driver(d), phase(std::move(ph)), start(s), stage(st) {}
     Driver* driver;
     std::string phase;
     int start;
+    const Objective* stage;  // a window continuation's stage; null: the calibration's window
     int seq = 0;
     std::vector<double> best_u, first_u;
     double best = INFINITY;
@@ -186,13 +203,13 @@ class Driver {
     std::vector<double> u(x, x + n);
     if (c->first_u.empty()) c->first_u = u;
     try {
-      const Point p = d.evaluate(u, c->phase, c->start, c->seq++);
-      if (p.terms.value < c->best) {
-        c->best = p.terms.value;
+      const Point p = d.evaluate(u, c->phase, c->start, c->seq++, c->stage);
+      if (p.optimized < c->best) {
+        c->best = p.optimized;
         c->best_u = u;
         c->best_terms = p.terms;
       }
-      return p.terms.value;
+      return p.optimized;
     } catch (const Stopped&) {
       c->stop = "stopped";
     } catch (...) {
@@ -204,7 +221,7 @@ class Driver {
 
   // Runs `algorithm` from u0 in context c; returns NLopt's stop reason unless the context set one.
   void optimize(const std::string& algorithm, int max_evaluations, std::vector<double> u0, Context& c,
-                int seed) {
+                int seed, double initial_step) {
     const unsigned n = static_cast<unsigned>(u0.size());
     nlopt::srand(static_cast<unsigned long>(seed));  // thread-local in NLopt: each start its own sequence
     nlopt::opt opt(nlopt_algorithm(algorithm), n);
@@ -214,7 +231,7 @@ class Driver {
     opt.set_maxeval(max_evaluations);
     opt.set_xtol_abs(spec_.algorithm.xtol_abs);
     if (spec_.algorithm.ftol_abs > 0) opt.set_ftol_abs(spec_.algorithm.ftol_abs);
-    if (is_local_algorithm(algorithm)) opt.set_initial_step(spec_.algorithm.initial_step);
+    if (is_local_algorithm(algorithm)) opt.set_initial_step(initial_step);
     if (spec_.algorithm.population > 0 && (algorithm == "CRS2_LM" || algorithm == "ISRES"))
       opt.set_population(static_cast<unsigned>(spec_.algorithm.population));
     if (algorithm == "MLSL") {
@@ -244,16 +261,34 @@ class Driver {
     std::vector<double> u0;
     for (size_t j = 0; j < spec_.parameters.size(); ++j)
       u0.push_back(spec_.parameters[j].to_unit(out.from[j]));
+    // A window continuation's stages (spec.h), each a local fit from the one before's best, the first with
+    // the calibration's first step and the later ones with the smaller stage step: they refine, and a
+    // large first step would leave the basin the earlier window found.
+    double step = spec_.algorithm.initial_step;
+    for (size_t k = 0; k < stages_.size(); ++k) {
+      Context st(this, stage_phase(k), s, &stages_[k]);
+      optimize(spec_.algorithm.name, spec_.algorithm.max_evaluations, u0, st,
+               static_cast<int>(spec_.algorithm.seed) + s, step);
+      out.stage_evaluations += st.seq;
+      if (st.stop == "stopped" || st.stop == "time budget") {
+        out.stop = st.stop;
+        out.first_u = out.first_u.empty() ? st.first_u : out.first_u;
+        return out;
+      }
+      if (out.first_u.empty()) out.first_u = st.first_u;
+      if (!st.best_u.empty()) u0 = st.best_u;
+      step = spec_.algorithm.stage_step;
+    }
     Context c(this, "optimize", s);
     optimize(spec_.algorithm.name, spec_.algorithm.max_evaluations, u0, c,
-             static_cast<int>(spec_.algorithm.seed) + s);
+             static_cast<int>(spec_.algorithm.seed) + s, step);
     out.evaluations = c.seq;
     out.stop = c.stop;
     if (!spec_.algorithm.polish.empty() && !c.best_u.empty() && c.stop != "stopped" &&
         c.stop != "time budget") {
       Context p(this, "polish", s);
       optimize(spec_.algorithm.polish, spec_.algorithm.polish_evaluations, c.best_u, p,
-               static_cast<int>(spec_.algorithm.seed) + s);
+               static_cast<int>(spec_.algorithm.seed) + s, spec_.algorithm.initial_step);
       out.polish_evaluations = p.seq;
       out.stop += "; polish: " + p.stop;
       if (p.stop == "stopped" || p.stop == "time budget") out.stop = p.stop;
@@ -266,7 +301,7 @@ class Driver {
     out.value = c.best;
     out.terms = c.best_terms;
     out.best_u = c.best_u;
-    out.first_u = c.first_u;
+    if (out.first_u.empty()) out.first_u = c.first_u;
     for (size_t j = 0; j < c.best_u.size(); ++j)
       out.best.push_back(spec_.parameters[j].from_unit(c.best_u[j]));
     return out;
@@ -442,10 +477,13 @@ class Driver {
   Evaluator& evaluator_;
   std::int64_t campaign_;
   Objective objective_;
+  std::vector<Objective> stages_;  // window continuation (spec.h), in order
   Clock::time_point start_time_;
 };
 
 }  // namespace
+
+std::string stage_phase(size_t k) { return "stage-" + std::to_string(k + 1); }
 
 int run_calibration(const CalibrationSpec& spec, const CalibrateOptions& options, CalibrationResult& result) {
   store::CampaignStore db(options.db_file);  // the writer lock first: a refused job writes nothing anywhere
@@ -498,7 +536,9 @@ int run_calibration(const CalibrationSpec& spec, const CalibrateOptions& options
       result.starts[static_cast<size_t>(s)] = driver.run_start(s);
       const auto& r = result.starts[static_cast<size_t>(s)];
       std::printf(
-          "start %d: objective %.6g after %d evaluation(s)%s (%s)\n", s, r.value, r.evaluations,
+          "start %d: objective %.6g after %s%d evaluation(s)%s (%s)\n", s, r.value,
+          r.stage_evaluations ? (std::to_string(r.stage_evaluations) + " in stages + ").c_str() : "",
+          r.evaluations,
           r.polish_evaluations ? (" + " + std::to_string(r.polish_evaluations) + " polish").c_str() : "",
           r.stop.c_str());
       std::fflush(stdout);
@@ -508,7 +548,7 @@ int run_calibration(const CalibrationSpec& spec, const CalibrateOptions& options
   }
   for (const auto& s : result.starts) {
     if (s.stop == "stopped") interrupted = true;
-    result.optimizer_evaluations += s.evaluations + s.polish_evaluations;
+    result.optimizer_evaluations += s.stage_evaluations + s.evaluations + s.polish_evaluations;
   }
   const bool budget = std::any_of(result.starts.begin(), result.starts.end(),
                                   [](const StartResult& s) { return s.stop == "time budget"; });

@@ -28,7 +28,8 @@ struct StartResult {
                 // converting back from physical values may miss the stored run by an ulp)
   double value = 0;
   ObjectiveTerms terms;
-  int evaluations = 0;  // the optimizer's (repeats included)
+  int stage_evaluations = 0;  // the window continuation's stages before the whole window (repeats included)
+  int evaluations = 0;        // the optimizer's over the whole window (repeats included)
   int polish_evaluations = 0;
   std::string stop;           // why NLopt stopped (its result), or "time budget", "stopped"
   bool same_optimum = false;  // within 2 % of each parameter's range of the best start's optimum
@@ -72,6 +73,9 @@ struct CalibrationResult {
 
 // Runs (or resumes) the calibration and writes OUT/calibration.json and its SVGs. Returns the exit code:
 // 0 (finished, or stopped by the time budget: run again to continue), 128 + signal when stopped.
+// The store's phase of a window continuation's stage k (0-based): "stage-1", "stage-2", ...
+std::string stage_phase(size_t k);
+
 int run_calibration(const CalibrationSpec& spec, const CalibrateOptions& options, CalibrationResult& result);
 
 // Runs `points` (physical values, spec parameter order) as evaluations of the calibration already in the

@@ -21,6 +21,13 @@ std::optional<double> arrival_time(const std::vector<double>& time, const std::v
   return std::nullopt;
 }
 
+ObjectiveSpec stage_objective(const ObjectiveSpec& spec, double end_s) {
+  ObjectiveSpec stage = spec;
+  stage.window_end_s = end_s;
+  stage.stage_end_s.clear();
+  return stage;
+}
+
 Objective::Objective(const ObjectiveSpec& spec, const std::vector<TargetRecord>& targets,
                      const std::string& spec_file)
     : spec_(spec) {
@@ -33,6 +40,10 @@ Objective::Objective(const ObjectiveSpec& spec, const std::vector<TargetRecord>&
         w.time.push_back(r.time[k]);
         w.target.push_back(r.elevation[k]);
       }
+    if (w.time.empty())
+      throw InputError(spec_file, "objective.window",
+                       "the target of " + r.gauge + " (" + r.file + ") has no sample in [" +
+                           std::to_string(spec.window_start_s) + ", " + std::to_string(spec.window_end_s) + "] s");
     w.peak_m = *std::max_element(w.target.begin(), w.target.end());
     w.arrival_s =
         arrival_time(w.time, w.target, spec.arrival_threshold_m, spec.window_start_s, spec.window_end_s);

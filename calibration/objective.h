@@ -33,6 +33,9 @@ struct ObjectiveTerms {
 std::optional<double> arrival_time(const std::vector<double>& time, const std::vector<double>& value,
                                    double threshold, double t0, double t1);
 
+// The objective of one stage of a window continuation: `spec` over [window_start_s, end_s].
+ObjectiveSpec stage_objective(const ObjectiveSpec& spec, double end_s);
+
 class Objective {
  public:
   // Throws InputError when the arrival term is weighted and a target never arrives in the window.
@@ -54,6 +57,8 @@ class Objective {
     std::optional<double> arrival_s;
   };
   const std::vector<Window>& windows() const { return windows_; }
+  double window_start_s() const { return spec_.window_start_s; }
+  double window_end_s() const { return spec_.window_end_s; }
 
  private:
   ObjectiveSpec spec_;

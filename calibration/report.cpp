@@ -127,13 +127,17 @@ void write_report(const CalibrationSpec& spec, const CalibrateOptions& options, 
     fig.save((out / "profiles.svg").string());
   }
 
-  // history.svg: objective per evaluation, one line per start (optimize then polish).
+  // history.svg: the whole window's objective per evaluation, one line per start (a window continuation's
+  // stages, then optimize, then polish).
   {
     plot::Figure fig(1, 1, 640, 400);
     auto& ax = fig.axes().title("Objective per evaluation").xlabel("evaluation").ylabel("objective [m]");
     ax.yscale(plot::Scale::kLog);
     std::map<std::int64_t, std::pair<std::vector<double>, std::vector<double>>> lines;
-    for (const auto& phase : {"optimize", "polish"})
+    std::vector<std::string> phases;
+    for (size_t k = 0; k < spec.objective.stage_end_s.size(); ++k) phases.push_back(stage_phase(k));
+    phases.insert(phases.end(), {"optimize", "polish"});
+    for (const auto& phase : phases)
       for (const auto& e : history)
         if (e.phase == phase && std::isfinite(e.value) && e.value > 0) {
           auto& [x, y] = lines[e.start];
@@ -169,13 +173,15 @@ void write_report(const CalibrationSpec& spec, const CalibrateOptions& options, 
   j["objective"] = {{"window_s", {spec.objective.window_start_s, spec.objective.window_end_s}},
                     {"peak_weight", spec.objective.peak_weight},
                     {"arrival_weight_m_per_s", spec.objective.arrival_weight_m_per_s},
-                    {"arrival_threshold_m", spec.objective.arrival_threshold_m}};
+                    {"arrival_threshold_m", spec.objective.arrival_threshold_m},
+                    {"stages_end_s", spec.objective.stage_end_s}};
   j["starts"] = json::array();
   for (const auto& s : result.starts)
     j["starts"].push_back({{"index", s.index},
                            {"from", values(spec, s.from)},
                            {"to", values(spec, s.best)},
                            {"objective", num(s.value)},
+                           {"stage_evaluations", s.stage_evaluations},
                            {"evaluations", s.evaluations},
                            {"polish_evaluations", s.polish_evaluations},
                            {"stop", s.stop},

@@ -193,6 +193,16 @@ CalibrationSpec parse_calibration_spec(const std::string& json_text, const std::
     spec.objective.peak_weight = o.number("peak_weight");
     spec.objective.arrival_weight_m_per_s = o.number("arrival_weight_m_per_s");
     spec.objective.arrival_threshold_m = o.number("arrival_threshold_m");
+    const json& stages = o.array("stages");
+    if (stages.size() > 16) o.fail("stages", "takes at most 16 end times (got " + std::to_string(stages.size()) + ")");
+    for (const json& end : stages) {
+      const double t0 = spec.objective.window_start_s, t1 = spec.objective.window_end_s;
+      const double before = spec.objective.stage_end_s.empty() ? t0 : spec.objective.stage_end_s.back();
+      if (!end.is_number() || !(end.get<double>() > before) || !(end.get<double>() < t1))
+        o.fail("stages", "must be increasing end times in s, each inside the window (" + fmt(t0) + ", " + fmt(t1) +
+                             ") (got " + end.dump() + ")");
+      spec.objective.stage_end_s.push_back(end.get<double>());
+    }
     if (o.has("time_shift")) {
       Reader s = o.object("time_shift");
       FreeParameter fp;
@@ -232,6 +242,10 @@ CalibrationSpec parse_calibration_spec(const std::string& json_text, const std::
     al.xtol_abs = a.number("xtol_abs");
     al.ftol_abs = a.number("ftol_abs");
     al.initial_step = a.number("initial_step");
+    al.stage_step = a.number("stage_step");
+    if (!spec.objective.stage_end_s.empty() && !is_local_algorithm(al.name))
+      a.fail("name", "is global; objective.stages refines each stage's optimum and needs a local algorithm "
+                     "(BOBYQA, COBYLA, NELDERMEAD or SBPLX)");
     al.population = static_cast<int>(a.integer("population"));
     al.seed = static_cast<std::uint64_t>(a.integer("seed"));
     a.finish();
@@ -403,6 +417,13 @@ CalibrationSpec parse_calibration_spec(const std::string& json_text, const std::
   identity["targets"] = target_ids;
   Objective check(spec.objective, spec.targets,
                   spec.file);  // targets without an arrival, when one is weighted
+  for (double end : spec.objective.stage_end_s) {
+    try {
+      Objective stage(stage_objective(spec.objective, end), spec.targets, spec.file);
+    } catch (const InputError& e) {
+      throw InputError(spec.file, "objective.stages", "the stage ending at " + fmt(end) + " s: " + e.problem());
+    }
+  }
 
   spec.canonical = identity.dump();
   spec.hash = campaigns::text_hash(spec.canonical);

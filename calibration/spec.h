@@ -33,6 +33,11 @@ struct TargetFile {
 
 struct ObjectiveSpec {
   double window_start_s = 0, window_end_s = 0;
+  // Window continuation: the optimizer fits [window_start_s, stage_end_s[k]] for each k in turn, each from
+  // the one before's optimum, then the whole window. A record whose late part answers the parameters
+  // nonlinearly (reflections, trailing waves) has a misfit with a local minimum in every dent; its early
+  // part decides the basin (docs/calibration.md, "Window continuation").
+  std::vector<double> stage_end_s;
   double peak_weight = 0.0;             // on the peak elevation error (m per m)
   double arrival_weight_m_per_s = 0.0;  // on the arrival time error
   double arrival_threshold_m = 0.005;   // arrival: first exceedance, as the run metrics define it
@@ -50,6 +55,7 @@ struct AlgorithmSpec {
   double xtol_abs = 1e-4;       // in unit coordinates
   double ftol_abs = 0;          // m; 0: off
   double initial_step = 0.1;    // local algorithms' first step, in unit coordinates
+  double stage_step = 0.01;     // the first step of each fit after the first stage: it refines, not searches
   int population = 0;           // CRS2_LM / ISRES population; 0: NLopt's default
   std::uint64_t seed = 1;
 };

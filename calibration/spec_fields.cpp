@@ -51,6 +51,14 @@ const ObjectDoc& objective_doc() {
            .in_unit("s")
            .needed()
            .note("0 <= t0 < t1, within the simulated time"),
+       value("stages", json::parse(R"({"type": "array", "items": {"type": "number", "minimum": 0},
+                                      "maxItems": 16})"),
+             "array of end times",
+             "window continuation: fit [t0, each end] in turn, each from the one before's optimum, then the "
+             "window; absent: the window alone")
+           .in_unit("s")
+           .eg(json::array({1.8}))
+           .note("increasing, each in (t0, t1); needs a local algorithm (docs/calibration.md)"),
        number("peak_weight", "weight of the peak elevation misfit").in(0, 1e6).def(0.0),
        number("arrival_weight_m_per_s", "weight of the arrival time misfit")
            .in(0, 1e6)
@@ -72,7 +80,7 @@ const ObjectDoc& algorithm_doc() {
       {choice("name", algorithm_names(), "the optimizer (local: BOBYQA needs 2 or more parameters)").needed(),
        choice("local", local_algorithms(), "MLSL's local optimizer").needed_when("by MLSL"),
        choice("polish", local_algorithms(), "a local optimizer run after a global one"),
-       integer("max_evaluations", "evaluations per start").in(1, 1000000).needed(),
+       integer("max_evaluations", "evaluations per start, and per stage of objective.stages").in(1, 1000000).needed(),
        integer("polish_evaluations", "evaluations of the polish").in(1, 1000000).def(50),
        number("max_time_s", "wall-clock limit per start; 0: none").in(0, 1e9).def(0.0).in_unit("s"),
        number("xtol_abs", "stop when a step moves every parameter less than this (unit cube)")
@@ -80,6 +88,10 @@ const ObjectDoc& algorithm_doc() {
            .def(1e-4),
        number("ftol_abs", "stop when the objective changes less than this").in(0, 1e3).def(0.0),
        number("initial_step", "first step (unit cube)").above(0).at_most(0.5).def(0.1),
+       number("stage_step", "first step of each fit after objective.stages' first (unit cube)")
+           .above(0)
+           .at_most(0.5)
+           .def(0.01),
        integer("population", "population of the global algorithms; 0: NLopt's default").in(0, 100000).def(0),
        integer("seed", "NLopt's random seed").in(0, 4294967295.0).def(1)}};
   return d;

@@ -33,6 +33,7 @@ struct GaugeInputs {
   double fill_level_m = 0.90;
   double still_water_m = 0.23;
   double end_time = 6.0;
+  double undulation_m = 0.0;
   double sleep_s = 0.0;
 };
 
@@ -77,6 +78,9 @@ std::string read_gauge_inputs(const std::vector<std::pair<std::string, std::stri
     } else if (name == "solver.end_time") {
       if (!number_in(v, 0.0, 60.0, true, g.end_time))
         return name + ": must be a number in (0, 60] s (got " + v.dump() + ")";
+    } else if (name == "undulation_m") {
+      if (!number_in(v, 0.0, 0.1, false, g.undulation_m))
+        return name + ": must be a number in [0, 0.1] m (got " + v.dump() + ")";
     } else if (name == "sleep_s") {
       if (!number_in(v, 0.0, 3600.0, false, g.sleep_s))
         return name + ": must be in [0, 3600] (got " + v.dump() + ")";
@@ -128,6 +132,23 @@ double gauge_hold(const GaugeInputs& g, double t) {
   while (tab[k][0] < t) ++k;
   const double w = (t - tab[k - 1][0]) / (tab[k][0] - tab[k - 1][0]);
   return tab[k - 1][1] + w * (tab[k][1] - tab[k - 1][1]);
+}
+
+// Trailing undulations behind the front (a test hook, off at 0): amplitude `amplitude_m`, period
+// 0.25 s sqrt(0.1 m / H) with H the front's height, as an undular bore's waves lengthen when it weakens
+// (Peregrine 1966). Their phase t / T drifts with H, so over a long window the misfit has a local minimum
+// every period (cycle skipping) while the first period stays convex: the calibration tests' case for
+// window continuation.
+void add_undulations(double amplitude_m, double front_s, const std::vector<double>& time,
+                     std::vector<double>& elevation) {
+  if (amplitude_m <= 0) return;
+  const double height = *std::max_element(elevation.begin(), elevation.end());
+  if (!(height > 0)) return;
+  const double period = 0.25 * std::sqrt(0.1 / height), pi = 3.14159265358979323846;
+  for (size_t k = 0; k < time.size(); ++k) {
+    const double s = time[k] - front_s;
+    if (s > 0) elevation[k] += amplitude_m * (1.0 - std::exp(-s / 0.1)) * std::sin(2 * pi * s / period);
+  }
 }
 
 struct GaugeRecord {
@@ -189,6 +210,7 @@ std::vector<GaugeRecord> gauge_records(const GaugeInputs& g, std::int64_t& steps
       r.time.push_back(t);
       r.elevation.push_back(attenuation * sum / norm / c);
     }
+    add_undulations(g.undulation_m, delay, r.time, r.elevation);
     out.push_back(std::move(r));
   }
   return out;
@@ -226,7 +248,8 @@ std::vector<std::string> gauge_model_inputs() {
   return {"reservoir.forcing.model", "reservoir.forcing.t99_s",
           "reservoir.forcing.table", "reservoir.gate_height_m",
           "reservoir.fill_level_m",  "basin.still_water_m",
-          "solver.end_time",         "sleep_s"};
+          "solver.end_time",         "undulation_m",
+          "sleep_s"};
 }
 
 std::vector<std::string> gauge_model_gauges() { return {"WG1", "WG2", "WG3", "WG4"}; }

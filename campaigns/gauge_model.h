@@ -4,7 +4,8 @@
 // linear long wave to the gauges. Its inputs are the scene's paths, so one calibration spec serves both:
 //   reservoir.forcing.model none|exponential|table, reservoir.forcing.t99_s, reservoir.forcing.table
 //   ([[time_s, hold], ...]) and its elements reservoir.forcing.table.<i>.<0|1>, reservoir.gate_height_m,
-//   reservoir.fill_level_m, basin.still_water_m, solver.end_time, and sleep_s (a test hook: wait first).
+//   reservoir.fill_level_m, basin.still_water_m, solver.end_time, and two test hooks: sleep_s (wait first)
+//   and undulation_m (trailing waves whose period follows the front's height: a misfit with local minima).
 // It is not a model of the flume: no reflections, no apron, no nonlinearity.
 #pragma once
 #include <cstdint>

@@ -10,7 +10,8 @@
 # Usage: docs/calibration_twin.sh [all|exp|global|fixed|table|resume ...]   (default: all)
 # Environment: FLUME (build/bin/flume), SCENE (scenes/waseda/waseda_2d.json), OUT (calibration-twin), DX (0.02),
 #   END_TIME (6, s simulated), WINDOW ("0, 6"), WORKERS (2: runs at once), THREADS (1: per run),
-#   TIME_LIMIT_S (3600 per run), NOISE_M (0.002: the target noise, m), RESUME_AFTER (10), XTOL (1e-4: xtol_abs of every optimizer), STANDIN (0; 1: the `gauge` test stand-in model instead of
+#   TIME_LIMIT_S (3600 per run), NOISE_M (0.002: the target noise, m), RESUME_AFTER (10), XTOL (1e-4: xtol_abs of every optimizer),
+#   STAGES ("": none; "1.5, 2.2": exp's window continuation, objective.stages), STANDIN (0; 1: the `gauge` test stand-in model instead of
 #   the scene, to check this script in minutes: its numbers say nothing about the flume).
 # Everything lands in $OUT: truth runs, target CSVs, one store (study.db), one folder per calibration with
 # calibration.json, fit.svg, profiles.svg, history.svg; summary.txt collects the numbers for the docs.
@@ -30,6 +31,7 @@ RESUME_AFTER=${RESUME_AFTER:-10}
 XTOL=${XTOL:-1e-4}
 STANDIN=${STANDIN:-0}
 NOISE_M=${NOISE_M:-0.002}
+STAGES=${STAGES:-}
 TRUE_T99=0.8
 TRUE_GATE=0.085
 TRUE_TABLE='[[0, 1], [0.3, 0.75], [0.6, 0.4], [0.9, 0.15], [1.2, 0]]'
@@ -88,7 +90,7 @@ exp_spec() {  # $1: name
  "overrides": {$COMMON_OVERRIDES, "reservoir.forcing.model": "exponential"},
  "targets": [{"file": "$OUT/truth_exp.wg1.csv", "gauge": "WG1"}],
  "parameters": $(two_params 0.2 0.12),
- "objective": {"window": [$WINDOW]},
+ "objective": {"window": [$WINDOW]${STAGES:+, \"stages\": [$STAGES]}},
  "algorithm": {"name": "BOBYQA", "max_evaluations": 80, "xtol_abs": $XTOL},
  "profile": {"points": 3, "span": 0.1},
  "run": $RUN_SETTINGS}
