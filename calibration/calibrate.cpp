@@ -270,12 +270,11 @@ class Driver {
       optimize(spec_.algorithm.name, spec_.algorithm.max_evaluations, u0, st,
                static_cast<int>(spec_.algorithm.seed) + s, step);
       out.stage_evaluations += st.seq;
+      if (out.first_u.empty()) out.first_u = st.first_u;
       if (st.stop == "stopped" || st.stop == "time budget") {
         out.stop = st.stop;
-        out.first_u = out.first_u.empty() ? st.first_u : out.first_u;
         return out;
       }
-      if (out.first_u.empty()) out.first_u = st.first_u;
       if (!st.best_u.empty()) u0 = st.best_u;
       step = spec_.algorithm.stage_step;
     }
