@@ -43,7 +43,8 @@ Objective::Objective(const ObjectiveSpec& spec, const std::vector<TargetRecord>&
     if (w.time.empty())
       throw InputError(spec_file, "objective.window",
                        "the target of " + r.gauge + " (" + r.file + ") has no sample in [" +
-                           std::to_string(spec.window_start_s) + ", " + std::to_string(spec.window_end_s) + "] s");
+                           std::to_string(spec.window_start_s) + ", " + std::to_string(spec.window_end_s) +
+                           "] s");
     w.peak_m = *std::max_element(w.target.begin(), w.target.end());
     w.arrival_s =
         arrival_time(w.time, w.target, spec.arrival_threshold_m, spec.window_start_s, spec.window_end_s);

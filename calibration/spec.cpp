@@ -194,13 +194,14 @@ CalibrationSpec parse_calibration_spec(const std::string& json_text, const std::
     spec.objective.arrival_weight_m_per_s = o.number("arrival_weight_m_per_s");
     spec.objective.arrival_threshold_m = o.number("arrival_threshold_m");
     const json& stages = o.array("stages");
-    if (stages.size() > 16) o.fail("stages", "takes at most 16 end times (got " + std::to_string(stages.size()) + ")");
+    if (stages.size() > 16)
+      o.fail("stages", "takes at most 16 end times (got " + std::to_string(stages.size()) + ")");
     for (const json& end : stages) {
       const double t0 = spec.objective.window_start_s, t1 = spec.objective.window_end_s;
       const double before = spec.objective.stage_end_s.empty() ? t0 : spec.objective.stage_end_s.back();
       if (!end.is_number() || !(end.get<double>() > before) || !(end.get<double>() < t1))
-        o.fail("stages", "must be increasing end times in s, each inside the window (" + fmt(t0) + ", " + fmt(t1) +
-                             ") (got " + end.dump() + ")");
+        o.fail("stages", "must be increasing end times in s, each inside the window (" + fmt(t0) + ", " +
+                             fmt(t1) + ") (got " + end.dump() + ")");
       spec.objective.stage_end_s.push_back(end.get<double>());
     }
     if (o.has("time_shift")) {
@@ -244,8 +245,9 @@ CalibrationSpec parse_calibration_spec(const std::string& json_text, const std::
     al.initial_step = a.number("initial_step");
     al.stage_step = a.number("stage_step");
     if (!spec.objective.stage_end_s.empty() && !is_local_algorithm(al.name))
-      a.fail("name", "is global; objective.stages refines each stage's optimum and needs a local algorithm "
-                     "(BOBYQA, COBYLA, NELDERMEAD or SBPLX)");
+      a.fail("name",
+             "is global; objective.stages refines each stage's optimum and needs a local algorithm "
+             "(BOBYQA, COBYLA, NELDERMEAD or SBPLX)");
     al.population = static_cast<int>(a.integer("population"));
     al.seed = static_cast<std::uint64_t>(a.integer("seed"));
     a.finish();
@@ -421,7 +423,8 @@ CalibrationSpec parse_calibration_spec(const std::string& json_text, const std::
     try {
       Objective stage(stage_objective(spec.objective, end), spec.targets, spec.file);
     } catch (const InputError& e) {
-      throw InputError(spec.file, "objective.stages", "the stage ending at " + fmt(end) + " s: " + e.problem());
+      throw InputError(spec.file, "objective.stages",
+                       "the stage ending at " + fmt(end) + " s: " + e.problem());
     }
   }
 

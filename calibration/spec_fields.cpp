@@ -80,7 +80,9 @@ const ObjectDoc& algorithm_doc() {
       {choice("name", algorithm_names(), "the optimizer (local: BOBYQA needs 2 or more parameters)").needed(),
        choice("local", local_algorithms(), "MLSL's local optimizer").needed_when("by MLSL"),
        choice("polish", local_algorithms(), "a local optimizer run after a global one"),
-       integer("max_evaluations", "evaluations per start, and per stage of objective.stages").in(1, 1000000).needed(),
+       integer("max_evaluations", "evaluations per start, and per stage of objective.stages")
+           .in(1, 1000000)
+           .needed(),
        integer("polish_evaluations", "evaluations of the polish").in(1, 1000000).def(50),
        number("max_time_s", "wall-clock limit per start; 0: none").in(0, 1e9).def(0.0).in_unit("s"),
        number("xtol_abs", "stop when a step moves every parameter less than this (unit cube)")

@@ -245,10 +245,14 @@ void write_gauges(const GaugeInputs& g, const std::string& out_dir, std::map<std
 }  // namespace
 
 std::vector<std::string> gauge_model_inputs() {
-  return {"reservoir.forcing.model", "reservoir.forcing.t99_s",
-          "reservoir.forcing.table", "reservoir.gate_height_m",
-          "reservoir.fill_level_m",  "basin.still_water_m",
-          "solver.end_time",         "undulation_m",
+  return {"reservoir.forcing.model",
+          "reservoir.forcing.t99_s",
+          "reservoir.forcing.table",
+          "reservoir.gate_height_m",
+          "reservoir.fill_level_m",
+          "basin.still_water_m",
+          "solver.end_time",
+          "undulation_m",
           "sleep_s"};
 }
 

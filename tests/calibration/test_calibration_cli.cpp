@@ -299,7 +299,8 @@ TEST(CalibrateTwin, WindowContinuationReachesTheBasinThatCycleSkippingHidesFromO
       "targets": [{"file": "target.csv"}],
       "parameters": [{"path": "reservoir.forcing.t99_s", "lower": 0.05, "upper": 2.0, "start": 0.2},
                      {"path": "reservoir.gate_height_m", "lower": 0.04, "upper": 0.16, "start": 0.12}],
-      "objective": {"window": [0, 5])" + stages + R"(},
+      "objective": {"window": [0, 5])" +
+           stages + R"(},
       "algorithm": {"name": "BOBYQA", "max_evaluations": 80}, "profile": {"points": 1, "span": 0.01}})";
   };
   write_file(dir / "plain.json", spec("plain", ""));
@@ -324,11 +325,12 @@ TEST(CalibrateTwin, WindowContinuationReachesTheBasinThatCycleSkippingHidesFromO
   // The stage's evaluations are stored with the whole window's terms (what the posterior reads) and the
   // stage's own objective beside them.
   const std::string staged_id = scalar(db, "SELECT id FROM campaigns WHERE name = 'staged'");
-  EXPECT_EQ(scalar(db, "SELECT count(*) FROM evaluations WHERE phase = 'stage-1' AND campaign = " + staged_id),
-            std::to_string(staged["starts"][0]["stage_evaluations"].get<int>()));
-  const json stage_terms =
-      json::parse(scalar(db, "SELECT terms FROM evaluations WHERE phase = 'stage-1' AND campaign = " + staged_id +
-                                 " ORDER BY seq LIMIT 1"));
+  EXPECT_EQ(
+      scalar(db, "SELECT count(*) FROM evaluations WHERE phase = 'stage-1' AND campaign = " + staged_id),
+      std::to_string(staged["starts"][0]["stage_evaluations"].get<int>()));
+  const json stage_terms = json::parse(
+      scalar(db, "SELECT terms FROM evaluations WHERE phase = 'stage-1' AND campaign = " + staged_id +
+                     " ORDER BY seq LIMIT 1"));
   EXPECT_EQ(stage_terms["stage"]["window_s"], json::array({0.0, 1.5}));
   EXPECT_EQ(stage_terms["gauges"]["WG1"]["samples"].get<int>(), 501) << "the whole window's terms";
   EXPECT_TRUE(stage_terms["stage"]["objective"].is_number());

@@ -238,14 +238,18 @@ TEST(Spec, WindowContinuationStagesAreCheckedAndPartOfTheIdentity) {
     return R"({"name": "s", "model": "gauge", "targets": [{"file": "wg1.csv"}], "parameters":
       [{"path": "reservoir.forcing.t99_s", "lower": 0.05, "upper": 2, "start": 0.2},
        {"path": "reservoir.gate_height_m", "lower": 0.04, "upper": 0.16, "start": 0.12}],
-      "objective": )" + objective + R"(, "algorithm": {"name": ")" + algorithm + R"(", "max_evaluations": 80}})";
+      "objective": )" +
+           objective + R"(, "algorithm": {"name": ")" + algorithm + R"(", "max_evaluations": 80}})";
   };
-  auto parse = [&](const std::string& text) { return parse_calibration_spec(text, "spec.json", dir.string()); };
+  auto parse = [&](const std::string& text) {
+    return parse_calibration_spec(text, "spec.json", dir.string());
+  };
   const auto plain = parse(spec(R"({"window": [0, 2]})"));
   const auto staged = parse(spec(R"({"window": [0, 2], "stages": [1.0, 1.5]})"));
   EXPECT_TRUE(plain.objective.stage_end_s.empty());
   EXPECT_EQ(staged.objective.stage_end_s, (std::vector<double>{1.0, 1.5}));
-  EXPECT_NE(plain.hash, staged.hash) << "stages change the optimizer's path: a stored calibration must refuse them";
+  EXPECT_NE(plain.hash, staged.hash)
+      << "stages change the optimizer's path: a stored calibration must refuse them";
   EXPECT_EQ(staged.algorithm.stage_step, 0.01);
   expect_input_error([&] { parse(spec(R"({"window": [0, 2], "stages": [2.5]})")); }, "objective.stages",
                      "each inside the window (0, 2)");
@@ -257,11 +261,12 @@ TEST(Spec, WindowContinuationStagesAreCheckedAndPartOfTheIdentity) {
                      "must be increasing");
   expect_input_error([&] { parse(spec(R"({"window": [0, 2], "stages": 1})")); }, "objective.stages",
                      "must be an array");
-  expect_input_error([&] { parse(spec(R"({"window": [0, 2], "stages": [1]})", "CRS2_LM")); }, "algorithm.name",
-                     "needs a local algorithm");
+  expect_input_error([&] { parse(spec(R"({"window": [0, 2], "stages": [1]})", "CRS2_LM")); },
+                     "algorithm.name", "needs a local algorithm");
   expect_input_error(
       [&] {
-        parse(spec(R"({"window": [0, 2], "stages": [0.5], "arrival_weight_m_per_s": 1, "arrival_threshold_m": 0.01})"));
+        parse(spec(
+            R"({"window": [0, 2], "stages": [0.5], "arrival_weight_m_per_s": 1, "arrival_threshold_m": 0.01})"));
       },
       "objective.stages", "the stage ending at 0.5 s");
 }
