@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "common/errors.h"
+#include "common/input/fields.h"
 
 namespace flume::calibration {
 
@@ -43,8 +44,8 @@ Objective::Objective(const ObjectiveSpec& spec, const std::vector<TargetRecord>&
     if (w.time.empty())
       throw InputError(spec_file, "objective.window",
                        "the target of " + r.gauge + " (" + r.file + ") has no sample in [" +
-                           std::to_string(spec.window_start_s) + ", " + std::to_string(spec.window_end_s) +
-                           "] s");
+                           input::number_text(spec.window_start_s) + ", " +
+                           input::number_text(spec.window_end_s) + "] s");
     w.peak_m = *std::max_element(w.target.begin(), w.target.end());
     w.arrival_s =
         arrival_time(w.time, w.target, spec.arrival_threshold_m, spec.window_start_s, spec.window_end_s);

@@ -9,14 +9,13 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <set>
-#include <sstream>
 
 #include "calibration/objective.h"
+#include "calibration/spec_fields.h"
 #include "campaigns/gauge_model.h"
 #include "campaigns/run_folders.h"
 #include "campaigns/spec.h"
 #include "common/errors.h"
-#include "calibration/spec_fields.h"
 #include "common/input/field_reader.h"
 #include "common/input/json_input.h"
 #include "solver/scene.h"
@@ -27,12 +26,6 @@ namespace {
 using json = nlohmann::json;
 namespace fs = std::filesystem;
 constexpr double kInf = std::numeric_limits<double>::infinity();
-
-std::string fmt(double v) {
-  std::ostringstream s;
-  s << v;
-  return s.str();
-}
 
 using input::type_name;
 
@@ -200,8 +193,9 @@ CalibrationSpec parse_calibration_spec(const std::string& json_text, const std::
       const double t0 = spec.objective.window_start_s, t1 = spec.objective.window_end_s;
       const double before = spec.objective.stage_end_s.empty() ? t0 : spec.objective.stage_end_s.back();
       if (!end.is_number() || !(end.get<double>() > before) || !(end.get<double>() < t1))
-        o.fail("stages", "must be increasing end times in s, each inside the window (" + fmt(t0) + ", " +
-                             fmt(t1) + ") (got " + end.dump() + ")");
+        o.fail("stages", "must be increasing end times in s, each inside the window (" +
+                             input::number_text(t0) + ", " + input::number_text(t1) + ") (got " + end.dump() +
+                             ")");
       spec.objective.stage_end_s.push_back(end.get<double>());
     }
     if (o.has("time_shift")) {
@@ -329,9 +323,9 @@ CalibrationSpec parse_calibration_spec(const std::string& json_text, const std::
       for (double v : {spec.parameters[j].lower, spec.parameters[j].upper, spec.parameters[j].start}) {
         problem = campaigns::check_gauge_inputs(sets_with(j, v));
         if (!problem.empty())
-          throw InputError(
-              spec.file, "parameters." + std::to_string(j),
-              "model gauge rejects " + spec.parameters[j].path + " = " + fmt(v) + ": " + problem);
+          throw InputError(spec.file, "parameters." + std::to_string(j),
+                           "model gauge rejects " + spec.parameters[j].path + " = " + input::number_text(v) +
+                               ": " + problem);
       }
     }
     spec.gauges = campaigns::gauge_model_gauges();
@@ -356,7 +350,8 @@ CalibrationSpec parse_calibration_spec(const std::string& json_text, const std::
           load(sets_with(j, v));
         } catch (const InputError& e) {
           throw InputError(spec.file, "parameters." + std::to_string(j),
-                           "the scene rejects " + spec.parameters[j].path + " = " + fmt(v) + ": " + e.what());
+                           "the scene rejects " + spec.parameters[j].path + " = " + input::number_text(v) +
+                               ": " + e.what());
         }
       }
     }
@@ -369,8 +364,8 @@ CalibrationSpec parse_calibration_spec(const std::string& json_text, const std::
     if (!p.needs_run) max_back_shift = std::min(0.0, p.lower);
   if (spec.record_end_s < spec.objective.window_end_s - max_back_shift)
     throw InputError(spec.file, "objective.window",
-                     "ends at " + fmt(spec.objective.window_end_s) +
-                         " s but the simulation records only to " + fmt(spec.record_end_s) +
+                     "ends at " + input::number_text(spec.objective.window_end_s) +
+                         " s but the simulation records only to " + input::number_text(spec.record_end_s) +
                          " s (solver.end_time" +
                          (max_back_shift < 0 ? ", with the time shift's lower bound" : std::string()) +
                          "); shorten the window or set solver.end_time in overrides");
@@ -424,7 +419,7 @@ CalibrationSpec parse_calibration_spec(const std::string& json_text, const std::
       Objective stage(stage_objective(spec.objective, end), spec.targets, spec.file);
     } catch (const InputError& e) {
       throw InputError(spec.file, "objective.stages",
-                       "the stage ending at " + fmt(end) + " s: " + e.problem());
+                       "the stage ending at " + input::number_text(end) + " s: " + e.problem());
     }
   }
 
