@@ -255,10 +255,11 @@ Series gauge(const fs::path& run, const std::string& name) {
 // the record within 10% of the full run's peak (eta above still water, as the gauges report it). At dx = 0.04 m
 // the water over the apron (0.025 m above still water) is thinner than one cell at WG3 and half a cell at WG4, so
 // that comparison says more about sub-cell films than about the inflow (with the free-slip mirror it gave WG3
-// 10.0 %, WG4 6.6 %; docs/waseda.md).
+// 10.0 %, WG4 6.6 %; docs/waseda.md). FLUME_SET="solver.method=sph" measures SPH's replay (docs/sph.md).
 TEST(Apron, Apron2dReproducesWg3AndWg4OfTheRunItWasFedFrom) {
   const fs::path dir = temp_dir("wg");
-  const std::vector<Override> common = {{"solver.dx", "0.02"}, {"solver.end_time", "5"}};
+  std::vector<Override> common = {{"solver.dx", "0.02"}, {"solver.end_time", "5"}};
+  for (const auto& o : test::env_overrides()) common.push_back(o);  // e.g. FLUME_SET="solver.method=sph"
   const std::string src = std::string(FLUME_SOURCE_DIR) + "/scenes/waseda/";
   const RunOutcome full = run_scene(load_scene(src + "waseda_2d.json", common), {}, (dir / "full").string());
   ASSERT_EQ(full.status, RunStatus::kOk) << full.message;
