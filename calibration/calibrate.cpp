@@ -21,7 +21,7 @@
 #include "campaigns/run_folders.h"
 #include "common/duration.h"
 #include "common/errors.h"
-#include "flume_version.h"
+#include "common/version.h"
 
 namespace flume::calibration {
 namespace {
@@ -511,7 +511,7 @@ int run_calibration(const CalibrationSpec& spec, const CalibrateOptions& options
     rec.name = spec.name;
     rec.spec = spec.canonical;
     rec.spec_hash = spec.hash;
-    rec.code_version = std::string(FLUME_VERSION) + " (" + FLUME_GIT_VERSION + ")";
+    rec.code_version = build_info::version_and_commit();
     std::vector<store::ParameterColumn> cols;
     for (const auto& p : spec.parameters)
       if (p.needs_run) cols.push_back({p.path, false});

@@ -15,10 +15,10 @@
 #include <thread>
 
 #include "campaigns/process.h"
-#include "common/duration.h"
 #include "campaigns/run_folders.h"
+#include "common/duration.h"
 #include "common/errors.h"
-#include "flume_version.h"
+#include "common/version.h"
 
 #ifdef FLUME_HAVE_MPI
 #include <mpi.h>
@@ -210,7 +210,7 @@ int run_campaign(const CampaignSpec& spec, const EngineOptions& options, int mpi
     rec.name = spec.name;
     rec.spec = spec.canonical;
     rec.spec_hash = spec.hash;
-    rec.code_version = std::string(FLUME_VERSION) + " (" + FLUME_GIT_VERSION + ")";
+    rec.code_version = build_info::version_and_commit();
     rec.design_size = static_cast<std::int64_t>(planned.size());
     rec.saltelli_base_size = static_cast<std::int64_t>(spec.points.saltelli_base_size);
     std::vector<store::ParameterColumn> cols;

@@ -7,7 +7,7 @@
 #include "cli/registry.h"
 #include "common/command.h"
 #include "common/errors.h"
-#include "flume_version.h"
+#include "common/version.h"
 
 namespace flume::cli {
 namespace {
@@ -65,8 +65,8 @@ std::string reworded(const CLI::ParseError& e) {
 
 std::unique_ptr<CLI::App> build_app() {
   auto app = std::make_unique<CLI::App>("flume: tsunami-debris flume simulation and uncertainty campaigns", "flume");
-  app->set_version_flag("--version", std::string("flume ") + FLUME_VERSION + " (" + FLUME_GIT_VERSION + ", " +
-                                         FLUME_BUILD_KIND + " build)");
+  app->set_version_flag("--version", std::string("flume ") + build_info::version() + " (" +
+                                         build_info::commit() + ", " + build_info::kind() + " build)");
   app->allow_extras();  // unknown options are reported by run() in flume's words; subcommands inherit this
   app->require_subcommand(0, 1);
   for (const Command& c : commands()) {

@@ -7,7 +7,7 @@
 #include <sstream>
 
 #include "common/plot/figure.h"
-#include "flume_version.h"
+#include "common/version.h"
 #include "report/html_parts.h"
 #include "report/map.h"
 #include "report/report.h"
@@ -450,8 +450,8 @@ std::string render_html(const Report& r) {
   for (std::size_t i = 0; i < d.parameters.size(); ++i)
     h << (i ? ", " : "") << xml_escape(d.parameters[i].path);
   h << "<br>store " << xml_escape(d.db_file) << " &middot; campaign run by flume "
-    << xml_escape(d.record.code_version) << " &middot; report by flume " << FLUME_VERSION << " ("
-    << xml_escape(FLUME_GIT_VERSION) << ") on " << when << " &middot; confidence "
+    << xml_escape(d.record.code_version) << " &middot; report by flume " << build_info::version() << " ("
+    << xml_escape(build_info::commit()) << ") on " << when << " &middot; confidence "
     << pct(r.options.stats.confidence) << "</p>\n";
   if (d.model == "debris")
     h << "<p class=warn><b>Synthetic debris model:</b> these runs come from the analytic stand-in `flume "

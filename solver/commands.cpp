@@ -14,7 +14,7 @@
 
 #include "common/command.h"
 #include "common/errors.h"
-#include "flume_version.h"
+#include "common/version.h"
 #include "solver/run.h"
 #include "solver/run_output.h"
 #include "solver/scene.h"
@@ -122,30 +122,31 @@ void add_bench_command(CLI::App& app) {
     for (size_t k = 0; k < stages1.size() && k < stages0.size(); ++k)
       stages[stages1[k].first] = stages1[k].second - stages0[k].second;
     const double bytes = sim->bytes_per_step();
-    nlohmann::json j = {{"scene", scene.file},
-                        {"dimension", scene.dimension},
-                        {"precision", to_string(scene.solver.precision)},
-                        {"backend", options.backend == Backend::kCuda ? "cuda" : "cpu"},
-                        {"build", FLUME_BUILD_KIND},
-                        {"threads", options.threads > 0 ? options.threads : omp_get_max_threads()},
-                        {"dx", scene.solver.dx},
-                        {"status", st == RunStatus::kUnstable ? "unstable" : "ok"},
-                        {"wall_s", wall},
-                        {"steps", steps},
-                        {"particles", sim->particle_count()},
-                        {"particle_steps_per_s", wall > 0 ? double(steps) * double(sim->particle_count()) / wall : 0},
-                        // CPU seconds of the measured steps (all threads): on a shared machine, where the wall
-                        // time counts the waits for a core, particle-steps per CPU-second compare builds.
-                        {"cpu_s", cpu},
-                        {"particle_steps_per_cpu_s", cpu > 0 ? double(steps) * double(sim->particle_count()) / cpu : 0},
-                        {"peak_rss_mb", peak_rss_mb()},
-                        {"method", to_string(scene.solver.method)},
-                        {"neighbour_interactions_per_s", wall > 0 ? double(pairs) / wall : 0},
-                        {"grid_mb", sim->grid_bytes() / 1048576.0},
-                        {"active_blocks", sim->active_blocks()},
-                        {"stage_s", stages},
-                        {"bytes_per_particle_step", sim->particle_count() ? bytes / double(sim->particle_count()) : 0},
-                        {"memory_gb_per_s", wall > 0 ? bytes * double(steps) / wall / 1e9 : 0}};
+    nlohmann::json j = {
+        {"scene", scene.file},
+        {"dimension", scene.dimension},
+        {"precision", to_string(scene.solver.precision)},
+        {"backend", options.backend == Backend::kCuda ? "cuda" : "cpu"},
+        {"build", build_info::kind()},
+        {"threads", options.threads > 0 ? options.threads : omp_get_max_threads()},
+        {"dx", scene.solver.dx},
+        {"status", st == RunStatus::kUnstable ? "unstable" : "ok"},
+        {"wall_s", wall},
+        {"steps", steps},
+        {"particles", sim->particle_count()},
+        {"particle_steps_per_s", wall > 0 ? double(steps) * double(sim->particle_count()) / wall : 0},
+        // CPU seconds of the measured steps (all threads): on a shared machine, where the wall
+        // time counts the waits for a core, particle-steps per CPU-second compare builds.
+        {"cpu_s", cpu},
+        {"particle_steps_per_cpu_s", cpu > 0 ? double(steps) * double(sim->particle_count()) / cpu : 0},
+        {"peak_rss_mb", peak_rss_mb()},
+        {"method", to_string(scene.solver.method)},
+        {"neighbour_interactions_per_s", wall > 0 ? double(pairs) / wall : 0},
+        {"grid_mb", sim->grid_bytes() / 1048576.0},
+        {"active_blocks", sim->active_blocks()},
+        {"stage_s", stages},
+        {"bytes_per_particle_step", sim->particle_count() ? bytes / double(sim->particle_count()) : 0},
+        {"memory_gb_per_s", wall > 0 ? bytes * double(steps) / wall / 1e9 : 0}};
     std::printf("%s\n", j.dump(2).c_str());
     return st == RunStatus::kUnstable ? kExitUnstable : kExitOk;
   });

@@ -10,7 +10,7 @@
 #include <filesystem>
 
 #include "common/errors.h"
-#include "flume_version.h"
+#include "common/version.h"
 #include "solver/checkpoint.h"
 #include "solver/debris_coupling.h"
 #include "solver/debris_metrics.h"
@@ -105,7 +105,7 @@ void write_record(h5::RunFile& file, const Scene& scene, const Record& record) {
   file.set_attribute("/", "dimension", scene.dimension);
   file.set_attribute("/", "method", to_string(scene.solver.method));
   file.set_attribute("/", "dx", scene.solver.dx);
-  file.set_attribute("/", "flume_version", std::string(FLUME_VERSION) + " (" + FLUME_GIT_VERSION + ")");
+  file.set_attribute("/", "flume_version", build_info::version_and_commit());
 }
 
 namespace {

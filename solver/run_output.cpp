@@ -6,7 +6,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
-#include "flume_version.h"
+#include "common/version.h"
 
 namespace flume {
 
@@ -67,7 +67,7 @@ void write_run_json(const std::string& path, RunStatus status, const std::string
   j["method"] = to_string(scene.solver.method);
   // The scene as it ran (overrides applied); parsed back, it is the scene file's JSON.
   if (!scene.source_json.empty()) j["scene_json"] = nlohmann::json::parse(scene.source_json);
-  j["flume_version"] = std::string(FLUME_VERSION) + " (" + FLUME_GIT_VERSION + ")";
+  j["flume_version"] = build_info::version_and_commit();
   j["metrics"] = nlohmann::json::object();
   for (const auto& [k, v] : metrics)
     if (std::isfinite(v)) j["metrics"][k] = v;

@@ -13,7 +13,7 @@
 #include <system_error>
 #include <utility>
 
-#include "flume_version.h"
+#include "common/version.h"
 
 namespace flume::h5 {
 namespace {
@@ -383,8 +383,8 @@ RunFile::RunFile(std::string path) : impl_(std::make_unique<Impl>()) {
   std::filesystem::remove(impl_->path, ec);
   std::filesystem::remove(xdmf_path(), ec);
   impl_->open_file(true);
-  set_attribute("/", "flume_version", FLUME_VERSION);
-  set_attribute("/", "flume_git_version", FLUME_GIT_VERSION);
+  set_attribute("/", "flume_version", build_info::version());
+  set_attribute("/", "flume_git_version", build_info::commit());
 }
 
 RunFile::RunFile(std::string path, double keep_snapshots_before) : impl_(std::make_unique<Impl>()) {
@@ -433,8 +433,8 @@ RunFile::RunFile(std::string path, double keep_snapshots_before) : impl_(std::ma
       if (H5Ldelete(impl_->file.get(), link.c_str(), H5P_DEFAULT) < 0) fail(impl_->part, "cannot drop " + link);
   }
   impl_->snapshots = std::move(kept);
-  set_attribute("/", "flume_version", FLUME_VERSION);
-  set_attribute("/", "flume_git_version", FLUME_GIT_VERSION);
+  set_attribute("/", "flume_version", build_info::version());
+  set_attribute("/", "flume_git_version", build_info::commit());
 }
 
 RunFile::~RunFile() = default;

@@ -9,7 +9,7 @@
 
 #include "campaigns/engine.h"
 #include "campaigns/spec.h"
-#include "flume_version.h"
+#include "common/version.h"
 #include "store/db/campaign_store.h"
 
 namespace flume::test {
@@ -26,7 +26,7 @@ inline std::int64_t make_campaign(const std::string& db_file, const campaigns::C
   rec.name = spec.name;
   rec.spec = spec.canonical;
   rec.spec_hash = spec.hash;
-  rec.code_version = FLUME_VERSION;
+  rec.code_version = build_info::version();
   const auto planned = campaigns::plan_runs(spec);
   rec.design_size = static_cast<std::int64_t>(planned.size());
   rec.saltelli_base_size = static_cast<std::int64_t>(spec.points.saltelli_base_size);
