@@ -1,6 +1,6 @@
 // What this binary was built from, for the provenance every output carries (run.json, result.h5, the store,
 // reports, `flume --version`). Defined in version.cpp, the one file that includes the generated header, so
-// that a new commit recompiles one file (cmake/git_version.cmake regenerates it at every build).
+// that a new commit recompiles one file (cmake/git_version.cmake regenerates the header at every build).
 #pragma once
 #include <string>
 
