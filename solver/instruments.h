@@ -8,12 +8,13 @@
 #include <vector>
 
 #include "solver/bspline_weight.h"
-#include "solver/scene.h"
 #include "solver/checkpoint.h"
 #include "solver/connected_depth.h"
 #include "solver/particle_sums.h"
 #include "solver/pressure_probes.h"
+#include "solver/scene.h"
 #include "solver/simulation.h"
+#include "solver/solids.h"
 
 namespace flume {
 
@@ -35,27 +36,6 @@ inline double ground_level(const Scene& s, const Vec3d& p) {
     }
   }
   return z;
-}
-
-// Whether point p lies inside a solid of the scene (a boundary box, or behind a boundary plane) or outside the
-// domain box. Beyond a symmetry plane lies the water's mirror image, a solid only when `symmetry_is_solid`.
-inline bool inside_solid(const Scene& s, const Vec3d& p, bool symmetry_is_solid = true) {
-  for (int d = 0; d < s.dimension; ++d)
-    if (p[d] < s.domain_lo[d] || p[d] > s.domain_hi[d]) return true;
-  for (const auto& b : s.boundaries) {
-    if (!symmetry_is_solid && b.condition == BoundaryCondition::kSymmetry) continue;
-    const auto& sh = b.shape;
-    if (sh.type == ShapeType::kBox) {
-      bool in = true;
-      for (int d = 0; d < s.dimension; ++d) in &= p[d] > sh.lo[d] && p[d] < sh.hi[d];
-      if (in) return true;
-    } else {
-      double side = 0;
-      for (int d = 0; d < s.dimension; ++d) side += (p[d] - sh.point[d]) * sh.normal[d];
-      if (side < 0) return true;
-    }
-  }
-  return false;
 }
 
 // A gauge's image across a symmetry plane that its footprint (1.5 cells) reaches: the half-width scene's gauge

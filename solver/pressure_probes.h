@@ -21,6 +21,7 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #ifdef _OPENMP
@@ -28,18 +29,34 @@
 #endif
 
 #include "solver/bspline_weight.h"
-#include "solver/particle_sums.h"
 #include "solver/checkpoint.h"
+#include "solver/mpm/probe_k.h"
+#include "solver/particle_sums.h"
 #include "solver/scene.h"
 #include "solver/simulation.h"
+#include "solver/solids.h"
 
 namespace flume {
+
+namespace detail {
+template <class Solver, class = void>
+struct probes_on_grid : std::false_type {};
+template <class Solver>
+struct probes_on_grid<Solver, std::void_t<decltype(Solver::kProbesOnGrid)>>
+    : std::bool_constant<Solver::kProbesOnGrid> {};
+}  // namespace detail
+// Whether the solver reads pressure probes from its grid's wall push (Solver::kProbesOnGrid, probe_push()).
+template <class Solver>
+constexpr bool probes_on_grid = detail::probes_on_grid<Solver>::value;
 
 template <class Solver>
 class PressureProbeSet {
  public:
   explicit PressureProbeSet(const Scene& scene) : scene_(scene) {
-    for (const auto& p : scene.instruments.pressure_probes) clocks_.push_back(1.0 / p.rate_hz);
+    for (const auto& p : scene.instruments.pressure_probes) {
+      clocks_.push_back(1.0 / p.rate_hz);
+      area_.push_back(probe_open_area(scene, p));
+    }
     next_.assign(clocks_.size(), 0.0);
     sum_.assign(clocks_.size(), 0.0);
     since_.assign(clocks_.size(), 0.0);
@@ -109,7 +126,16 @@ class PressureProbeSet {
   // probes whose sample is due (all of them when `force`).
   void step(const Solver& s, double t, double dt, bool force, Record& record) {
     if (clocks_.empty()) return;
-    read(s, now_);
+    if constexpr (probes_on_grid<Solver>) {
+      if (dt > 0) {
+        read_push(s, dt, now_);
+      } else {
+        read(s,
+             now_);  // t = 0: no step has pushed yet; the water is at rest, as the particles' pressure says
+      }
+    } else {
+      read(s, now_);
+    }
     const auto& probes = scene_.instruments.pressure_probes;
     for (size_t k = 0; k < clocks_.size(); ++k) {
       sum_[k] += now_[k] * dt;  // samples fall on step ends, so the steps since one tile its interval
@@ -122,6 +148,71 @@ class PressureProbeSet {
       sum_[k] = 0;
       since_[k] = t;
     }
+  }
+
+  // The pressure from the walls' push at the nodes (solver/mpm/probe_k.h): the push along the normal over the
+  // step and the open face area the probe's weights cover (probe_open_area).
+  void read_push(const Solver& s, double dt, std::vector<double>& out) const {
+    const auto& probes = scene_.instruments.pressure_probes;
+    const auto& push = s.probe_push();
+    out.assign(probes.size(), 0.0);
+    for (size_t k = 0; k < probes.size(); ++k) out[k] = area_[k] > 0 ? push[k] / (dt * area_[k]) : 0.0;
+  }
+
+  // The face area behind a probe's grid reading: over the columns of nodes its weights reach (the grid's
+  // lattice, domain_lo + k dx, on each axis across the normal), each column's weight times the part of its
+  // face cell that is open, not inside another solid (sampled on an 8-point grid per axis, a quarter cell off
+  // the face into the water; across a symmetry plane at its image). Open everywhere, the weights sum to one
+  // and this is one column's area; next to a floor, the row of nodes on it carries the water of half a cell,
+  // and so counts half, so that a uniform pressure reads as itself up to the corner.
+  static double probe_open_area(const Scene& scene, const PressureProbe& p) {
+    const int D = scene.dimension;
+    const double dx = scene.solver.dx;
+    const double* n = p.normal.data();
+    const int a = D == 3 ? mpm::probe_normal_axis<3>(n) : mpm::probe_normal_axis<2>(n);
+    const double column = D == 3 ? mpm::probe_column_area<3>(n, dx) : mpm::probe_column_area<2>(n, dx);
+    int across[2] = {-1, -1}, nt = 0;
+    for (int d = 0; d < D; ++d)
+      if (d != a) across[nt++] = d;
+    const Boundary* plane = nullptr;
+    for (const auto& b : scene.boundaries)
+      if (b.condition == BoundaryCondition::kSymmetry) plane = &b;
+    constexpr int kSub = 8;
+    double area = 0;
+    const long k0[2] = {
+        nt > 0 ? std::lround(std::floor((p.position[across[0]] - scene.domain_lo[across[0]]) / dx)) - 2 : 0,
+        nt > 1 ? std::lround(std::floor((p.position[across[1]] - scene.domain_lo[across[1]]) / dx)) - 2 : 0};
+    for (long i = 0; i < (nt > 0 ? 5 : 1); ++i)
+      for (long j = 0; j < (nt > 1 ? 5 : 1); ++j) {
+        const long k[2] = {k0[0] + i, k0[1] + j};
+        double node[2] = {0, 0}, w = 1;
+        for (int t = 0; t < nt; ++t) {
+          node[t] = scene.domain_lo[across[t]] + double(k[t]) * dx;
+          w *= bspline_weight((node[t] - p.position[across[t]]) / dx);
+        }
+        if (w <= 0) continue;
+        int open = 0;
+        for (int u = 0; u < kSub; ++u)
+          for (int v = 0; v < (nt > 1 ? kSub : 1); ++v) {
+            const double off[2] = {(u + 0.5) / kSub - 0.5, (v + 0.5) / kSub - 0.5};
+            Vec3d q = p.position;
+            for (int d = 0; d < D; ++d) q[d] += 0.25 * dx * n[d];
+            for (int t = 0; t < nt;
+                 ++t) {  // along the face: across-axis moves, the normal axis follows the plane
+              const double step = node[t] + off[t] * dx - p.position[across[t]];
+              q[across[t]] += step;
+              q[a] -= step * n[across[t]] / n[a];
+            }
+            if (plane) {  // beyond a symmetry plane: its image
+              const int sa = mpm::probe_normal_axis<3>(plane->shape.normal.data());
+              const double side = (q[sa] - plane->shape.point[sa]) * plane->shape.normal[sa];
+              if (side < 0) q[sa] = 2 * plane->shape.point[sa] - q[sa];
+            }
+            open += inside_solid(scene, q, false) ? 0 : 1;
+          }
+        area += w * column * open / double(nt > 1 ? kSub * kSub : kSub);
+      }
+    return area;
   }
 
   void checkpoint(StateArchive& ar) {
@@ -138,6 +229,7 @@ class PressureProbeSet {
   };
   const Scene& scene_;
   std::vector<double> clocks_, next_, sum_, since_, now_;
+  std::vector<double> area_;  // per probe: the face area of one column of nodes (reading from the grid)
   std::vector<double> wsum_, psum_, pressure_;
   std::vector<Hit> hits_;
   std::vector<std::vector<Hit>> local_;  // per thread

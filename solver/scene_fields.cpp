@@ -228,18 +228,22 @@ const ObjectDoc& load_doc() {
 const ObjectDoc& pressure_probe_doc() {
   static const ObjectDoc d{
       "instruments.pressure_probes[]",
-      "A pressure probe: the water's pressure on a solid face at a point, as a flush-mounted sensor reads it. "
-      "The mean, over each sampling interval, of the particles' pressure within one cell of the point (a disc "
-      "of radius 1.5 dx on the face, a layer 1 dx deep), carried to the face with the hydrostatic gradient; "
-      "0 when dry (docs/results.md).",
+      "A pressure probe: the water's pressure on a solid face at a point, as a flush-mounted sensor reads "
+      "it, "
+      "the mean over each sampling interval. MPM: the walls' push on the water at the grid nodes within 1.5 "
+      "dx "
+      "of the point along the face, over the open face area they stand for (probes a cell apart along a wall "
+      "sum to its load cell); SPH: the particles' pressure within one cell of the point, carried to the face "
+      "with the hydrostatic gradient; 0 when dry (docs/results.md).",
       {string("name", "name, unique among the instruments").needed().eg("PS1"),
        vector("position", 2, 3, "a point on the face").needed().in_unit("m").note("inside the domain"),
        vector("normal", 2, 3, "the face's outward normal, out of the solid into the water (normalised)")
            .needed_when("without boundary")
            .note("non-zero"),
-       string("boundary",
-              "instead of normal: the boundary whose face the probe sits on (a half-space's plane, or the box "
-              "face nearest the point), within dx/2 of it")
+       string(
+           "boundary",
+           "instead of normal: the boundary whose face the probe sits on (a half-space's plane, or the box "
+           "face nearest the point), within dx/2 of it")
            .needed_when("without normal")
            .eg("column"),
        number("rate_hz", "sampling rate").above(0).at_most(1e7).def(1000.0).in_unit("Hz")}};

@@ -1,6 +1,6 @@
-// The CUDA backend of the MLS-MPM solver: the same step as the CPU backend (solver/mpm/cpu_solver.h), with the
-// physics taken from the same inline functions (solver/mpm_kernels.h, solver/mpm/*_k.h: one particle's P2G
-// terms and G2P update, one node against the boundaries, block keys), launched by mpm::parallel_for
+// The CUDA backend of the MLS-MPM solver: the same step as the CPU backend (solver/mpm/cpu_solver.h), with
+// the physics taken from the same inline functions (solver/mpm_kernels.h, solver/mpm/*_k.h: one particle's
+// P2G terms and G2P update, one node against the boundaries, block keys), launched by mpm::parallel_for
 // (solver/mpm/launch.h), on device arrays. This file holds the stencil loops with their atomics, the launches
 // and the memory.
 //
@@ -22,20 +22,21 @@
 //
 // Scatter and gather. P2G and G2P run a thread block per particle block (mpm::tiled_for) on a tile, in shared
 // memory, of the nodes the block's stencils reach: P2G's threads add their particles into it with shared
-// atomics and each tile node then goes to the grid with one global atomic per channel; G2P reads the tile from
-// the grid once and its particles gather from it (global atomics and gathers bound the one-thread-per-particle
-// stages: docs/benchmarks.md). The scatter's order is not fixed: results agree with the CPU, and between GPU
-// runs, to round-off.
+// atomics and each tile node then goes to the grid with one global atomic per channel; G2P reads the tile
+// from the grid once and its particles gather from it (global atomics and gathers bound the
+// one-thread-per-particle stages: docs/benchmarks.md). The scatter's order is not fixed: results agree with
+// the CPU, and between GPU runs, to round-off.
 //
-// Instruments. The CPU's InstrumentSet is reused unchanged. Velocity probes, volume gauges and pressure probes
-// (these read after every step) are sums over the particles of one term each (solver/particle_sums.h), reduced
-// here on the device (sum_particles): a few numbers come back. Connected gauges and sections read particle
-// positions and velocities from host mirrors, copied lazily, only on a step where one of them samples (2 D
-// arrays of n values: 24 MB for a million particles in 3D float, about 1-2 ms over PCIe); sections also read
-// the reference volumes, copied only after a sort has moved them. Diagnostics use the energies reduced on the
-// device during G2P: no copy.
-// Load cells sum the wall impulse on the device (atomics into D doubles per wall), copied back each step (a
-// few bytes) only when the scene has load cells.
+// Instruments. The CPU's InstrumentSet is reused unchanged. Velocity probes and volume gauges are sums over
+// the particles of one term each (solver/particle_sums.h), reduced here on the device (sum_particles): a few
+// numbers come back (pressure probes too, for their first sample at t = 0). Connected gauges and sections
+// read particle positions and velocities from host mirrors, copied lazily, only on a step where one of them
+// samples (2 D arrays of n values: 24 MB for a million particles in 3D float, about 1-2 ms over PCIe);
+// sections also read the reference volumes, copied only after a sort has moved them. Diagnostics use the
+// energies reduced on the device during G2P: no copy. Load cells sum the wall impulse on the device (atomics
+// into D doubles per wall), copied back each step (a few bytes) only when the scene has load cells; pressure
+// probes likewise sum the walls' push at the nodes near them (mpm::add_probe_push, one double per probe),
+// read after every step.
 //
 // The code uses Thrust only (device_vector, sort, unique, lower_bound, for_each, transform_reduce) with
 // functor structs, so that the same file also compiles with the host compiler against Thrust's sequential
@@ -158,6 +159,8 @@ struct View {
   int n_walls;
   mpm::Container<D, T> container;  // the domain box
   double* impulse;  // walls x D, or null when no load cell reads it
+  mpm::ProbeFaces probes;  // the pressure probes' faces (device arrays), count 0 when there are none
+  double* probe_push;      // per probe: this step's push (mpm::add_probe_push)
 
   // Global node coordinates of grid index idx.
   FLUME_HD void node_of(size_t idx, int* node) const {
@@ -407,8 +410,19 @@ struct GridUpdate {
     // The particles' momentum alone, before gravity and the walls: what a ghost's image reflects (mpm::ghost_pool_terms).
     for (int d = 0; d < D; ++d) s.ghost_dv[d * s.nodes + idx] = s.grid[(1 + d) * s.nodes + idx] / m;
     mpm::GhostSearch<D> found;
+    T v_free[D];
+    for (int d = 0; d < D; ++d) v_free[d] = v[d];
     const unsigned held = mpm::apply_boundaries<D>(xn, m, v, dt, load_weight, s.dx_d, s.subcell_rate, s.walls,
                                                    nullptr, s.n_walls, s.container, s.impulse, found);
+    if (s.probes.count > 0) {  // only nodes a wall acted on push
+      double push[D];
+      bool pushed = false;
+      for (int d = 0; d < D; ++d) {
+        push[d] = load_weight * double(m) * (double(v[d]) - double(v_free[d]));
+        pushed = pushed || push[d] != 0.0;
+      }
+      if (pushed) mpm::add_probe_push<D>(s.probes, xn, push, s.probe_push);
+    }
     s.ghost_mirror[idx] = -1;
     if (found.found()) {
       int mirror[D];
@@ -465,20 +479,23 @@ struct GhostExchange {
     mpm::ghost_pool_velocity<D>(pool, vm, s.grid[mi], held, u, push_dv);
     const unsigned axes = s.ghost_axes[idx];
     const int wall = s.ghost_wall[idx];
-    double load_weight = 1;  // 1/2 on a symmetry plane (GridUpdate)
-    if (s.has_sym && s.impulse && wall >= 0) {
-      int node[D];
-      s.node_of(idx, node);
-      if (mpm::symmetry_side(s.sym, node[s.sym.axis]) == 0) load_weight = 0.5;
-    }
+    int node[D];
+    s.node_of(idx, node);
+    const double load_weight = s.has_sym && mpm::symmetry_side(s.sym, node[s.sym.axis]) == 0 ? 0.5 : 1.0;
+    double push[D] = {};
     for (int d = 0; d < D; ++d) {
       if (mpm::ghost_takes_mean(axes, held, d)) s.grid[(1 + d) * s.nodes + idx] = u[d];
       s.ghost_dv[d * s.nodes + idx] = u[d];
-      // The image's push, by this ghost's share of the pushing mass, is its wall's load.
+      // The image's push, by this ghost's share of the pushing mass, is its wall's load (and the probes').
       const T nm = pool[2 * D + d];
-      if (s.impulse && wall >= 0 && (axes & (1u << d)) && nm > T(0))
-        mpm::accumulate(&s.impulse[wall * D + d],
-                        -load_weight * double(s.grid[mi]) * double(push_dv[d] * (s.grid[idx] / nm)));
+      if ((axes & (1u << d)) && nm > T(0))
+        push[d] = load_weight * double(s.grid[mi]) * double(push_dv[d] * (s.grid[idx] / nm));
+      if (s.impulse && wall >= 0 && push[d] != 0.0) mpm::accumulate(&s.impulse[wall * D + d], -push[d]);
+    }
+    if (s.probes.count > 0) {
+      double xg[D];
+      for (int d = 0; d < D; ++d) xg[d] = mpm::node_coordinate(s.grid_lo_d[d], node[d], s.dx_d);
+      mpm::add_probe_push<D>(s.probes, xg, push, s.probe_push);
     }
   }
 };
@@ -824,6 +841,7 @@ class MpmCuda final : public Simulation, private mpm::SceneConstants<D, T> {
     const V s = view();
     thr::fill(thr::device, grid_.begin(), grid_.end(), T(0));
     if (has_loads_) thr::fill(thr::device, impulse_.begin(), impulse_.end(), 0.0);
+    if (s.probes.count) thr::fill(thr::device, probe_push_d_.begin(), probe_push_d_.end(), 0.0);
     // The vacuum's hold: an upward force f(t) m |g| on the held water (as MpmSolver::p2g).
     const T lift = T(double(dt) * scene_.basin.forcing.hold(run_.time) * std::fabs(scene_.solver.gravity[D - 1]));
     const BlockTile<D> tile{raw(pkeys_), raw(pstart_)};
@@ -836,6 +854,7 @@ class MpmCuda final : public Simulation, private mpm::SceneConstants<D, T> {
     mpm::parallel_for(s.nodes, GhostMirrorUpdate<D, T>{s});
     if (s.has_sym) mpm::parallel_for(s.nodes, SymmetryMirror<D, T>{s});
     if (has_loads_) thr::copy(impulse_.begin(), impulse_.end(), load_impulse_.begin());
+    if (s.probes.count) thr::copy(probe_push_d_.begin(), probe_push_d_.end(), probe_push_.begin());
     if (debris_) couple_debris(s, double(dt));
     mpm::tiled_for<T>(pkeys_.size(), G2PTiled<D, T>{tile, {s, g2p_constants(s, T(dt))}});
     if (debris_) push_out_of_debris(s);
@@ -933,6 +952,9 @@ class MpmCuda final : public Simulation, private mpm::SceneConstants<D, T> {
   // --- read access for the instruments: sums on the device (solver/particle_sums.h); the rest from host
   // mirrors, refreshed lazily ---
   static constexpr bool kSumsOnDevice = true;
+  // The pressure probes read the walls' push at the nodes (solver/mpm/probe_k.h), summed on the device.
+  static constexpr bool kProbesOnGrid = true;
+  const std::vector<double>& probe_push() const { return probe_push_; }
   template <class Term>
   void sum_particles(const Term& term, double* sum) const {
     static_assert(Term::kValues <= kMaxParticleSum, "a term sums at most kMaxParticleSum values");
@@ -1009,6 +1031,10 @@ class MpmCuda final : public Simulation, private mpm::SceneConstants<D, T> {
     load_impulse_.assign(walls.size() * D, 0.0);
     has_loads_ = !scene_.instruments.loads.empty() && !walls.empty();
     impulse_.assign(walls.size() * D, 0.0);
+    const std::vector<double> geometry = mpm::probe_geometry(scene_);
+    probe_geometry_.assign(geometry.begin(), geometry.end());
+    probe_push_d_.assign(scene_.instruments.pressure_probes.size(), 0.0);
+    probe_push_.assign(scene_.instruments.pressure_probes.size(), 0.0);
   }
 
   V view() {
@@ -1059,6 +1085,17 @@ class MpmCuda final : public Simulation, private mpm::SceneConstants<D, T> {
     s.n_walls = n_walls_;
     s.container = container_;
     s.impulse = has_loads_ ? raw(impulse_) : nullptr;
+    // The view's pointers into probe_geometry_ (points, then normals) are device addresses.
+    s.probes = mpm::ProbeFaces{};
+    s.probes.count = static_cast<int>(probe_push_.size());
+    s.probes.point = s.probes.count ? raw(probe_geometry_) : nullptr;
+    s.probes.normal = s.probes.count ? raw(probe_geometry_) + 3 * s.probes.count : nullptr;
+    s.probes.dx = dx_;
+    if (has_sym_) {
+      s.probes.sym_axis = sym_.axis;
+      s.probes.sym_at = sym_.at;
+    }
+    s.probe_push = s.probes.count ? raw(probe_push_d_) : nullptr;
     return s;
   }
 
@@ -1333,6 +1370,8 @@ class MpmCuda final : public Simulation, private mpm::SceneConstants<D, T> {
   thr::device_vector<int32_t> ghost_wall_;
   thr::device_vector<Wall<D, T>> walls_;
   thr::device_vector<double> impulse_;
+  thr::device_vector<double> probe_geometry_, probe_push_d_;  // mpm::probe_geometry; per probe, the push
+  std::vector<double> probe_push_;                            // its copy on the host, for the instruments
   thr::device_vector<double> fill_work_;
   int n_walls_ = 0;
   int has_sym_ = 0;  // a symmetry plane (mpm::SymmetryPlane)

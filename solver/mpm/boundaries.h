@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "solver/mpm/node_k.h"
+#include "solver/mpm/probe_k.h"
 #include "solver/scene.h"
 #include "solver/symmetry.h"
 
@@ -54,6 +55,28 @@ bool scene_symmetry_plane(const Scene& scene, const double* grid_lo, double dx, 
       return true;
     }
   return false;
+}
+
+// The pressure probes' faces for mpm::add_probe_push: every probe's point (3 doubles each, scene order), then
+// every probe's normal. `geometry` must outlive the view probe_faces makes of it.
+inline std::vector<double> probe_geometry(const Scene& scene) {
+  std::vector<double> g;
+  for (const auto& p : scene.instruments.pressure_probes)
+    g.insert(g.end(), p.position.begin(), p.position.end());
+  for (const auto& p : scene.instruments.pressure_probes) g.insert(g.end(), p.normal.begin(), p.normal.end());
+  return g;
+}
+inline ProbeFaces probe_faces(const std::vector<double>& geometry, double dx, const SymmetryPlane* plane) {
+  ProbeFaces f;
+  f.count = static_cast<int>(geometry.size() / 6);
+  f.point = geometry.data();
+  f.normal = geometry.data() + 3 * f.count;
+  f.dx = dx;
+  if (plane) {
+    f.sym_axis = plane->axis;
+    f.sym_at = plane->at;
+  }
+  return f;
 }
 
 }  // namespace flume::mpm

@@ -21,6 +21,9 @@ void MpmSolver<D, T, Flip>::setup_boundaries() {
   container_ = scene_container<D, T>(scene_);
   subcell_rate0_ = subcell_rate0(c_, dx_);
   load_impulse_.assign(walls_.size() * D, 0.0);
+  probe_geometry_ = probe_geometry(scene_);
+  probe_faces_ = probe_faces(probe_geometry_, dx_, has_sym_ ? &sym_ : nullptr);
+  probe_push_.assign(static_cast<size_t>(probe_faces_.count), 0.0);
 }
 
 // After the walls and the ghosts: every node beyond the plane is the reflection of its mirror; one whose

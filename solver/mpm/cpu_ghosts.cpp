@@ -11,7 +11,8 @@ namespace flume::mpm {
 
 template <int D, typename T>
 void GhostReflection<D, T>::reflect(GridNodes<D, T>& grid, const std::vector<uint64_t>& gkeys,
-                                    std::vector<double>& load_impulse) {
+                                    std::vector<double>& load_impulse, const ProbeFaces& probes,
+                                    std::vector<double>& probe_push) {
   // Each thread's list is in node order already (a thread works through its shares of the grid blocks in
   // increasing order), so merging the lists suffices.
   all_.clear();
@@ -79,16 +80,17 @@ void GhostReflection<D, T>::reflect(GridNodes<D, T>& grid, const std::vector<uin
     }
     for (int d = 0; d < D; ++d) grid.v[d][mi] = u[d];
   }
-  // The image's push is the walls' load, in ghost order.
+  // The image's push is the walls' load, in ghost order; the domain box's counts for the probes only.
   for (size_t q = 0; q < mirror_dv_.size(); ++q) {
     const MirrorChange& c = mirror_dv_[q];
     if (c.node == kNoMirror) continue;
     const Ghost<D, T>& gh = all_[q];
-    if (gh.wall < 0) continue;
+    double push[D] = {};
     for (int d = 0; d < D; ++d)
-      if (gh.axes & (1u << d))
-        load_impulse[static_cast<size_t>(gh.wall) * D + d] -=
-            gh.load_weight * double(grid.m[c.node]) * double(c.dv[d]);
+      if (gh.axes & (1u << d)) push[d] = gh.load_weight * double(grid.m[c.node]) * double(c.dv[d]);
+    if (probes.count > 0) add_probe_push<D>(probes, gh.x, push, probe_push.data());
+    if (gh.wall < 0) continue;
+    for (int d = 0; d < D; ++d) load_impulse[static_cast<size_t>(gh.wall) * D + d] -= push[d];
   }
 }
 

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "solver/mpm/cpu_blocks.h"
+#include "solver/mpm/probe_k.h"
 
 namespace flume::mpm {
 
@@ -19,6 +20,7 @@ struct Ghost {
   T vpre[D] = {};          // the ghost's velocity from the particles alone (mpm::ghost_pool_terms)
   int wall = -1;           // the scene wall whose load takes the image's push (-1: the domain box)
   double load_weight = 1;  // 1/2 on a symmetry plane (the whole's load there is twice the half's)
+  double x[D] = {};        // the ghost node's position: where the image's push counts for a pressure probe
 };
 
 template <int D, typename T>
@@ -30,8 +32,10 @@ class GhostReflection {
   void begin(int nthreads) { ghosts_.resize(nthreads); }
   std::vector<Ghost<D, T>>* thread_list(int thread) { return &ghosts_[thread].list; }
   // The exchanges. The normal part of each mirror's change (the image's push) is its wall's load, added to
-  // load_impulse (D per wall); other than that no load: the exchange is internal to the water.
-  void reflect(GridNodes<D, T>& grid, const std::vector<uint64_t>& gkeys, std::vector<double>& load_impulse);
+  // load_impulse (D per wall) and to the pressure probes' pushes (mpm::add_probe_push); other than that no
+  // load: the exchange is internal to the water.
+  void reflect(GridNodes<D, T>& grid, const std::vector<uint64_t>& gkeys, std::vector<double>& load_impulse,
+               const ProbeFaces& probes, std::vector<double>& probe_push);
 
  private:
   struct MirrorChange {

@@ -14,10 +14,11 @@ namespace flume::mpm {
 // One grid node from what the particles gave it (its lanes `acc`): momentum to velocity, gravity, the walls
 // (their loads weighted by `load_weight`), its ghost pairing and the debris coupling.
 template <int D, typename T, bool Flip>
-void MpmSolver<D, T, Flip>::update_node(const Lane& acc, long g, size_t idx, const int* node, bool near_debris,
-                                  double load_weight, T dt, T inv_cell_volume, double* my_impulse,
-                                  std::vector<CouplingNode>* my_coupling,
-                                  std::vector<Ghost<D, T>>* my_ghosts) {
+void MpmSolver<D, T, Flip>::update_node(const Lane& acc, long g, size_t idx, const int* node,
+                                        bool near_debris, double load_weight, T dt, T inv_cell_volume,
+                                        double* my_impulse, double* my_probe_push,
+                                        std::vector<CouplingNode>* my_coupling,
+                                        std::vector<Ghost<D, T>>* my_ghosts) {
   const T m = acc[0];
   if (m <= T(0)) {
     grid_.clear(idx);
@@ -31,15 +32,27 @@ void MpmSolver<D, T, Flip>::update_node(const Lane& acc, long g, size_t idx, con
   double xn[D];
   for (int d = 0; d < D; ++d) xn[d] = mpm::node_coordinate(grid_lo_[d], node[d], dx_);
   mpm::GhostSearch<D> found;
+  T v_free[D];
+  for (int d = 0; d < D; ++d) v_free[d] = v[d];
   uint8_t held = mpm::apply_boundaries<D>(
       xn, m, v, dt, load_weight, dx_, subcell_rate0_, walls_.data(),
       blocks_.g_bnd.data() + blocks_.g_bnd_start[g],
       static_cast<int>(blocks_.g_bnd_start[g + 1] - blocks_.g_bnd_start[g]), container_, my_impulse, found);
+  if (probe_faces_.count > 0) {  // only nodes a wall acted on push
+    double push[D];
+    bool pushed = false;
+    for (int d = 0; d < D; ++d) {
+      push[d] = load_weight * double(m) * (double(v[d]) - double(v_free[d]));
+      pushed = pushed || push[d] != 0.0;
+    }
+    if (pushed) mpm::add_probe_push<D>(probe_faces_, xn, push, my_probe_push);
+  }
   if (found.found()) {
     ghost.idx = idx;
     ghost.load_weight = load_weight;
     ghost.axes = found.axes;
     ghost.wall = found.wall;
+    for (int d = 0; d < D; ++d) ghost.x[d] = xn[d];
     for (int d = 0; d < D; ++d) ghost.offset[d] = found.offset[d] + node[d];  // the mirror node itself
     my_ghosts->push_back(ghost);
   }
@@ -64,13 +77,15 @@ void MpmSolver<D, T, Flip>::grid_update(T dt) {
   const int nthreads = omp_get_max_threads();
   // A cache line (8 doubles) between one thread's load sums and the next's, wherever the buffer starts: a
   // shared line costs a transfer per wall node.
-  const size_t stride = walls_.size() * D + 8;
+  const size_t probes = probe_push_.size();
+  const size_t stride = walls_.size() * D + probes + 8;  // the loads, then the probes' pushes
   std::vector<double> impulse(static_cast<size_t>(nthreads) * stride, 0.0);
   if (debris_) debris_->begin_grid(nthreads);
   ghosts_.begin(nthreads);
 #pragma omp parallel
   {
     double* my_impulse = impulse.data() + static_cast<size_t>(omp_get_thread_num()) * stride;
+    double* my_probe_push = my_impulse + walls_.size() * D;
     std::vector<CouplingNode>* my_coupling = debris_ ? debris_->thread_nodes(omp_get_thread_num()) : nullptr;
     std::vector<Ghost<D, T>>* my_ghosts = ghosts_.thread_list(omp_get_thread_num());
     my_ghosts->clear();
@@ -127,7 +142,7 @@ void MpmSolver<D, T, Flip>::grid_update(T dt) {
             continue;
           }
           update_node(acc[k], g, base + k, node, near_debris, 1.0, dt, inv_cell_volume, my_impulse,
-                      my_coupling, my_ghosts);
+                      my_probe_push, my_coupling, my_ghosts);
         }
       }
     if (has_sym_) {
@@ -154,22 +169,25 @@ void MpmSolver<D, T, Flip>::grid_update(T dt) {
         }
         // No debris near: a scene with a symmetry plane has none (setup_boundaries).
         update_node(a, g, static_cast<size_t>(g) * kNodes + k, node, false, side == 0 ? 0.5 : 1.0, dt,
-                    inv_cell_volume, my_impulse, my_coupling, my_ghosts);
+                    inv_cell_volume, my_impulse, my_probe_push, my_coupling, my_ghosts);
       }
     }
   }
   std::fill(load_impulse_.begin(), load_impulse_.end(), 0.0);
   for (int t = 0; t < nthreads; ++t)
     for (size_t k = 0; k < load_impulse_.size(); ++k) load_impulse_[k] += impulse[t * stride + k];
-  ghosts_.reflect(grid_, blocks_.gkeys, load_impulse_);
+  std::fill(probe_push_.begin(), probe_push_.end(), 0.0);
+  for (int t = 0; t < nthreads; ++t)
+    for (size_t q = 0; q < probes; ++q) probe_push_[q] += impulse[t * stride + walls_.size() * D + q];
+  ghosts_.reflect(grid_, blocks_.gkeys, load_impulse_, probe_faces_, probe_push_);
   if (has_sym_) mirror_beyond_symmetry();
   if (debris_) debris_->couple(grid_.v, double(dt));
 }
 
-#define FLUME_INSTANTIATE(D, T, Flip)                                                                         \
-  template void MpmSolver<D, T, Flip>::update_node(const Lane&, long, size_t, const int*, bool, double, T, T, \
-                                             double*, std::vector<CouplingNode>*,                       \
-                                             std::vector<Ghost<D, T>>*);                                \
+#define FLUME_INSTANTIATE(D, T, Flip)                                                                      \
+  template void MpmSolver<D, T, Flip>::update_node(const Lane&, long, size_t, const int*, bool, double, T, \
+                                                   T, double*, double*, std::vector<CouplingNode>*,        \
+                                                   std::vector<Ghost<D, T>>*);                             \
   template void MpmSolver<D, T, Flip>::grid_update(T);
 FLUME_MPM_SOLVER_VARIANTS(FLUME_INSTANTIATE)
 #undef FLUME_INSTANTIATE

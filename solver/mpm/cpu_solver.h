@@ -27,6 +27,7 @@
 #include "solver/mpm/cpu_ghosts.h"
 #include "solver/mpm/cpu_variants.h"
 #include "solver/mpm/node_k.h"
+#include "solver/mpm/probe_k.h"
 #include "solver/mpm/run_state.h"
 #include "solver/mpm/symmetry_zone.h"
 #include "solver/mpm/thread_shares.h"
@@ -96,6 +97,10 @@ class MpmSolver final : public Simulation, private SceneConstants<D, T> {
   T volume(size_t i) const { return vol_[i]; }  // reference volume: the particle's mass over rho
   double max_speed() const { return run_.max_speed; }
   const Scene& scene() const { return scene_; }
+  // The pressure probes read the walls' push at the nodes (mpm::add_probe_push): per probe, the last step's
+  // sum of weight times push along its normal (N s).
+  static constexpr bool kProbesOnGrid = true;
+  const std::vector<double>& probe_push() const { return probe_push_; }
 
   // --- the energy audit (cpu_checkpoint.cpp) ---
   Energy energy() const;
@@ -113,7 +118,8 @@ class MpmSolver final : public Simulation, private SceneConstants<D, T> {
   void p2g(T dt);                                              // cpu_p2g.cpp
   void grid_update(T dt);                                      // cpu_grid_update.cpp
   void update_node(const Lane& acc, long g, size_t idx, const int* node, bool near_debris, double load_weight,
-                   T dt, T inv_cell_volume, double* my_impulse, std::vector<CouplingNode>* my_coupling,
+                   T dt, T inv_cell_volume, double* my_impulse, double* my_probe_push,
+                   std::vector<CouplingNode>* my_coupling,
                    std::vector<Ghost<D, T>>* my_ghosts);  // cpu_grid_update.cpp
   void mirror_beyond_symmetry();                          // cpu_boundaries.cpp
   void g2p(T dt);                                         // cpu_g2p.cpp
@@ -147,6 +153,9 @@ class MpmSolver final : public Simulation, private SceneConstants<D, T> {
   Container<D, T> container_;         // the domain box
   double subcell_rate0_ = 0;          // mpm::subcell_drag's rate
   std::vector<double> load_impulse_;  // D per wall: this step's impulse on the water (the load cells' input)
+  std::vector<double> probe_geometry_;  // the pressure probes' points and normals (mpm::probe_geometry)
+  ProbeFaces probe_faces_;              // a view of them
+  std::vector<double> probe_push_;      // per probe: this step's push (mpm::add_probe_push)
   GhostReflection<D, T> ghosts_;
   bool has_sym_ = false;
   SymmetryPlane sym_;

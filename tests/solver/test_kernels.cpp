@@ -198,7 +198,8 @@ TEST(GhostMirror, GhostsSharingAMirrorExchangeAsOneCollision) {
   reflection.begin(1);
   *reflection.thread_list(0) = ghosts;
   std::vector<double> load(3, 0.0);
-  reflection.reflect(grid, gkeys, load);
+  std::vector<double> no_probes;
+  reflection.reflect(grid, gkeys, load, flume::mpm::ProbeFaces{}, no_probes);
 
   double momentum = 0, work = 0;
   for (size_t i : {mirror, ghosts[0].idx, ghosts[1].idx, ghosts[2].idx}) {

@@ -6,6 +6,14 @@
 // column (solver/instruments.h) and the experiment's level sensors no longer measure the same thing
 // (docs/validation.md shows the full record).
 //
+// The pressure sensors 1-3 on the end wall (z = 3, 15, 30 mm; the scene's probes P1-P3): the impact's largest
+// 5 ms mean before t* = 3 within 20 % of the record's (issue 30's criterion for pressure peaks; one
+// repetition, Fig. 18's "peak event 5", 20 kHz). A 5 ms mean because the simulated wall pressure carries
+// MPM's cell-crossing ripple at 100-300 Hz (docs/validation.md section 3b), which the record does not. Sensor
+// 4 (80 mm) has no impact before t* = 3: its record only starts to rise there, so it is not scored. With the
+// probes' reading of the particles' pressure (before 2026-12-07) P3's peak was 43 % low and P1's 21 % high;
+// with half gravity the surge arrives after t* = 3 (both tests below).
+//
 // Error bound: the free surface is resolved to one particle spacing h = dx/2. We allow two of them, one for
 // the flow's discretisation and one for the gauge's reading (it jumps by h as particles cross the top),
 // i.e. RMS(h/H) <= dx/H = 1/30. The experiment's own scatter (the second acquisition series against the
@@ -46,6 +54,14 @@ const char* const kRecord[4] = {"Fig16_WaterLevels_H1_2.dat", "Fig16_WaterLevels
                                 "Fig16_WaterLevels_H3_3.dat", "Fig16_WaterLevels_H4_4.dat"};
 const char* const kRepeat[4] = {"", "Fig16_WaterLevels_H2_4.dat", "Fig16_WaterLevels_H3_4.dat",
                                 "Fig16_WaterLevels_H4_5.dat"};
+// Fig. 18's files hold sensors 1, 2, 3 in sensors_5, _4, _2 (each file's header names its sensor).
+const char* const kProbes[3] = {"P1", "P2", "P3"};
+const char* const kPressureRecord[3] = {"Fig18_peak_event_5_sensors_5.dat",
+                                        "Fig18_peak_event_5_sensors_4.dat",
+                                        "Fig18_peak_event_5_sensors_2.dat"};
+constexpr double kImpactEnd = 3.0;     // t*: the impact's window ends; the run-up follows
+constexpr double kPeakWindow = 0.005;  // s: the means whose largest is compared
+constexpr double kPeakTolerance = 0.2;
 
 double env_number(const char* name, double fallback) {
   const char* v = std::getenv(name);
@@ -85,6 +101,7 @@ Curve read_record(const std::string& path) {
 
 struct GaugeRun {
   Curve gauge[4];
+  Curve pressure[3];  // p / (rho g H) at P1-P3 against t*
   double wall_s = 0;
   long steps = 0;
   size_t particles = 0;
@@ -118,7 +135,33 @@ GaugeRun simulate(double dx, double end_tstar, std::vector<Override> sets = {}) 
       r.gauge[k].h.push_back(ts.at(i) / kH);
     }
   }
+  const double p_scale = scene.fluid.density * kGRec * kH;
+  for (int k = 0; k < 3; ++k) {
+    const auto& ts = sim->record().pressures.at(kProbes[k]);
+    for (size_t i = 0; i < ts.size(); ++i) {
+      r.pressure[k].t.push_back(ts.time[i] * t_scale);
+      r.pressure[k].h.push_back(ts.at(i) / p_scale);
+    }
+  }
   return r;
+}
+
+// The largest mean over kPeakWindow-long windows (on multiples of it in t) of a curve against t*, before
+// t_end*.
+double largest_window_mean(const Curve& c, double t_end) {
+  const double t_scale = std::sqrt(kGRec / kH);
+  std::vector<double> sum, count;
+  for (size_t i = 0; i < c.t.size(); ++i) {
+    if (c.t[i] >= t_end) break;
+    const size_t bin = static_cast<size_t>(c.t[i] / t_scale / kPeakWindow);
+    if (bin >= sum.size()) sum.resize(bin + 1, 0.0), count.resize(bin + 1, 0.0);
+    sum[bin] += c.h[i];
+    count[bin] += 1;
+  }
+  double best = 0;
+  for (size_t b = 0; b < sum.size(); ++b)
+    if (count[b] > 0) best = std::max(best, sum[b] / count[b]);
+  return best;
 }
 
 // RMS of (a - b) over the samples of `b` with t0 <= t* <= t1, `a` read at t* - shift.
@@ -210,6 +253,17 @@ TEST(Lobovsky2014, GaugesH2toH4MatchRecord) {
     const Curve dry{{0.0, 1.0}, {0.0, 0.0}};
     EXPECT_GT(rms(dry, r.rec[k], 0, kWindowEnd), bound) << "a dry gauge against " << kGauges[k];
   }
+  for (int k = 0; k < 3; ++k) {
+    const Curve rec = read_record(test::validation_file(std::string("lobovsky_2014/") + kPressureRecord[k]));
+    ASSERT_GE(rec.t.size(), 1000u) << kPressureRecord[k] << " not found";
+    const double sim = largest_window_mean(run.pressure[k], kImpactEnd);
+    const double meas = largest_window_mean(rec, kImpactEnd);
+    std::printf(
+        "%s: impact peak (largest 5 ms mean, t* < 3) %.2f against the record's %.2f (p / rho g H): %+.0f "
+        "%%\n",
+        kProbes[k], sim, meas, 100 * (sim / meas - 1));
+    EXPECT_NEAR(sim, meas, kPeakTolerance * meas) << kProbes[k] << " impact pressure against the record";
+  }
   if (const char* dir = std::getenv("FLUME_PLOT_DIR")) save_plot(dir, r, run, dx, t_end);
 }
 
@@ -226,6 +280,13 @@ TEST(Lobovsky2014, HalfGravityFails) {
     worst = std::max(worst, e);
   }
   EXPECT_GT(worst, dx / kH) << "half gravity passed the comparison: the bound does not test the physics";
+  double worst_peak = 0;
+  for (int k = 0; k < 3; ++k) {
+    const Curve rec = read_record(test::validation_file(std::string("lobovsky_2014/") + kPressureRecord[k]));
+    const double meas = largest_window_mean(rec, kImpactEnd);
+    worst_peak = std::max(worst_peak, std::fabs(largest_window_mean(run.pressure[k], kImpactEnd) / meas - 1));
+  }
+  EXPECT_GT(worst_peak, kPeakTolerance) << "half gravity passed the impact pressures";
 }
 
 }  // namespace
