@@ -1,22 +1,22 @@
 // Pressure probes (issue 30): the water's pressure on a solid face at a point, as a flush-mounted pressure
-// sensor on a wall, quay or column face reads it. Read by InstrumentSet (solver/instruments.h) after every step.
+// sensor on a wall, quay or column face reads it. Read by InstrumentSet (solver/instruments.h) after every
+// step.
 //
-// Estimator. The particles within one cell of the point count: those whose distance from the face along its
-// normal, s, is in [-dx/2, dx) (a layer one cell deep on the water's side; -dx/2 lets in a particle pressed a
-// little into the wall) and whose distance along the face from the point, t, is under 1.5 dx, weighted by the
-// quadratic B-spline w(t / dx) (the grid's own kernel: a disc of radius 1.5 dx on the face in 3D, a segment in
-// 2D). Each particle's pressure is the solver's equation of state at its strain (Tait, from J for MPM; from
-// rho for SPH: Simulation::particle_pressures), carried from the particle to the face with the hydrostatic
-// gradient, p + rho g . (x_face - x_p), since the particles nearest the face sit half a spacing off it (at
-// rest the correction is exact; in an impact it leaves out the deceleration's gradient over that half
-// spacing). The reading is the weighted mean, 0 when no particle is in the support (a dry sensor).
+// Reading. What a sensor's face feels is the wall's force on the water there, per unit area. Both methods
+// exert it at points of their own, MPM at the grid nodes a wall acts on, SPH through the wall's particles,
+// and sum it along the probe's normal with the grid's B-spline weights along the face (solver/mpm/probe_k.h,
+// Solver::probe_push); the reading is that push over the step and the open face area the weights cover
+// (probe_open_area). Probes a cell apart along a wall then carry its load cell's force.
+//
+// The first sample (t = 0, before any step has pushed) reads the particles instead: those whose distance from
+// the face along its normal is in [-dx/2, dx) and whose distance along it is under 1.5 dx, weighted by the
+// same B-spline, each particle's pressure (the solver's equation of state: Simulation::particle_pressures, or
+// summed on the device: solver/particle_sums.h) carried to the face with the hydrostatic gradient, p + rho g
+// . (x_face - x_p): exact at rest. 0 with no particle in the support (a dry sensor).
 //
 // Filter. As the load cells report the mean force over each sampling interval (impulse / time), a probe
 // reports the mean of its per-step readings over the interval (each weighted by its step), so a short impact
-// between two samples is not lost; the first sample (t = 0) is the reading then. Each step costs one parallel pass
-// over the particles' positions and, when one is in a probe's support, the solver's pass computing every
-// particle's pressure; a backend that sums on its device (the CUDA backend) instead reduces each probe's
-// PressureTerm there (solver/particle_sums.h), and only the sums come to the host.
+// between two samples is not lost.
 #pragma once
 #include <algorithm>
 #include <cmath>
@@ -40,14 +40,15 @@ namespace flume {
 
 namespace detail {
 template <class Solver, class = void>
-struct probes_on_grid : std::false_type {};
+struct probes_read_wall_push : std::false_type {};
 template <class Solver>
-struct probes_on_grid<Solver, std::void_t<decltype(Solver::kProbesOnGrid)>>
-    : std::bool_constant<Solver::kProbesOnGrid> {};
+struct probes_read_wall_push<Solver, std::void_t<decltype(Solver::kProbesReadWallPush)>>
+    : std::bool_constant<Solver::kProbesReadWallPush> {};
 }  // namespace detail
-// Whether the solver reads pressure probes from its grid's wall push (Solver::kProbesOnGrid, probe_push()).
+// Whether the solver reads pressure probes from its walls' push on the water (Solver::kProbesReadWallPush,
+// probe_push()): MPM's at the grid nodes, SPH's through its wall particles.
 template <class Solver>
-constexpr bool probes_on_grid = detail::probes_on_grid<Solver>::value;
+constexpr bool probes_read_wall_push = detail::probes_read_wall_push<Solver>::value;
 
 template <class Solver>
 class PressureProbeSet {
@@ -126,7 +127,7 @@ class PressureProbeSet {
   // probes whose sample is due (all of them when `force`).
   void step(const Solver& s, double t, double dt, bool force, Record& record) {
     if (clocks_.empty()) return;
-    if constexpr (probes_on_grid<Solver>) {
+    if constexpr (probes_read_wall_push<Solver>) {
       if (dt > 0) {
         read_push(s, dt, now_);
       } else {
@@ -159,18 +160,23 @@ class PressureProbeSet {
     for (size_t k = 0; k < probes.size(); ++k) out[k] = area_[k] > 0 ? push[k] / (dt * area_[k]) : 0.0;
   }
 
-  // The face area behind a probe's grid reading: over the columns of nodes its weights reach (the grid's
-  // lattice, domain_lo + k dx, on each axis across the normal), each column's weight times the part of its
-  // face cell that is open, not inside another solid (sampled on an 8-point grid per axis, a quarter cell off
-  // the face into the water; across a symmetry plane at its image). Open everywhere, the weights sum to one
-  // and this is one column's area; next to a floor, the row of nodes on it carries the water of half a cell,
-  // and so counts half, so that a uniform pressure reads as itself up to the corner.
+  // The face area behind a probe's reading of the walls' push: over the columns of pushing points its weights
+  // reach (MPM: the grid's nodes, domain_lo + k dx on each axis across the normal; SPH: the wall particles'
+  // lattice, (k + 1/2) s at its spacing s), each column's weight times the part of its face cell that is
+  // open, not inside another solid (sampled on an 8-point grid per axis, a quarter cell off the face into the
+  // water; across a symmetry plane at its image). Open everywhere this is one column's area times the
+  // weights' sum (1 over a lattice of dx, dx / s over one of s); next to a floor the row of nodes on it
+  // carries the water of half a cell, and so counts half, so that a uniform pressure reads as itself up to
+  // the corner.
   static double probe_open_area(const Scene& scene, const PressureProbe& p) {
     const int D = scene.dimension;
     const double dx = scene.solver.dx;
+    const bool sph = scene.solver.method == SolverMethod::kSph;
+    const int per_axis = std::max(1, static_cast<int>(std::lround(std::pow(scene.solver.ppc, 1.0 / D))));
+    const double step = sph ? dx / per_axis : dx;  // the lattice of the points that push
     const double* n = p.normal.data();
     const int a = D == 3 ? mpm::probe_normal_axis<3>(n) : mpm::probe_normal_axis<2>(n);
-    const double column = D == 3 ? mpm::probe_column_area<3>(n, dx) : mpm::probe_column_area<2>(n, dx);
+    const double column = D == 3 ? mpm::probe_column_area<3>(n, step) : mpm::probe_column_area<2>(n, step);
     int across[2] = {-1, -1}, nt = 0;
     for (int d = 0; d < D; ++d)
       if (d != a) across[nt++] = d;
@@ -179,29 +185,32 @@ class PressureProbeSet {
       if (b.condition == BoundaryCondition::kSymmetry) plane = &b;
     constexpr int kSub = 8;
     double area = 0;
-    const long k0[2] = {
-        nt > 0 ? std::lround(std::floor((p.position[across[0]] - scene.domain_lo[across[0]]) / dx)) - 2 : 0,
-        nt > 1 ? std::lround(std::floor((p.position[across[1]] - scene.domain_lo[across[1]]) / dx)) - 2 : 0};
-    for (long i = 0; i < (nt > 0 ? 5 : 1); ++i)
-      for (long j = 0; j < (nt > 1 ? 5 : 1); ++j) {
+    double origin[2] = {0, 0};
+    for (int t = 0; t < nt; ++t) origin[t] = sph ? 0.5 * step : scene.domain_lo[across[t]];
+    const long reach = static_cast<long>(std::ceil(1.5 * dx / step)) + 1;
+    long k0[2] = {0, 0};
+    for (int t = 0; t < nt; ++t)
+      k0[t] = std::lround(std::floor((p.position[across[t]] - origin[t]) / step)) - reach;
+    for (long i = 0; i < (nt > 0 ? 2 * reach + 2 : 1); ++i)
+      for (long j = 0; j < (nt > 1 ? 2 * reach + 2 : 1); ++j) {
         const long k[2] = {k0[0] + i, k0[1] + j};
         double node[2] = {0, 0}, w = 1;
         for (int t = 0; t < nt; ++t) {
-          node[t] = scene.domain_lo[across[t]] + double(k[t]) * dx;
+          node[t] = origin[t] + double(k[t]) * step;
           w *= bspline_weight((node[t] - p.position[across[t]]) / dx);
         }
         if (w <= 0) continue;
         int open = 0;
         for (int u = 0; u < kSub; ++u)
           for (int v = 0; v < (nt > 1 ? kSub : 1); ++v) {
-            const double off[2] = {(u + 0.5) / kSub - 0.5, (v + 0.5) / kSub - 0.5};
+            const double off[2] = {((u + 0.5) / kSub - 0.5) * step, ((v + 0.5) / kSub - 0.5) * step};
             Vec3d q = p.position;
             for (int d = 0; d < D; ++d) q[d] += 0.25 * dx * n[d];
-            for (int t = 0; t < nt;
-                 ++t) {  // along the face: across-axis moves, the normal axis follows the plane
-              const double step = node[t] + off[t] * dx - p.position[across[t]];
-              q[across[t]] += step;
-              q[a] -= step * n[across[t]] / n[a];
+            // Along the face: the axes across the normal move, the normal's axis follows the face's plane.
+            for (int t = 0; t < nt; ++t) {
+              const double along = node[t] + off[t] - p.position[across[t]];
+              q[across[t]] += along;
+              q[a] -= along * n[across[t]] / n[a];
             }
             if (plane) {  // beyond a symmetry plane: its image
               const int sa = mpm::probe_normal_axis<3>(plane->shape.normal.data());

@@ -230,11 +230,10 @@ const ObjectDoc& pressure_probe_doc() {
       "instruments.pressure_probes[]",
       "A pressure probe: the water's pressure on a solid face at a point, as a flush-mounted sensor reads "
       "it, "
-      "the mean over each sampling interval. MPM: the walls' push on the water at the grid nodes within 1.5 "
-      "dx "
-      "of the point along the face, over the open face area they stand for (probes a cell apart along a wall "
-      "sum to its load cell); SPH: the particles' pressure within one cell of the point, carried to the face "
-      "with the hydrostatic gradient; 0 when dry (docs/results.md).",
+      "the mean over each sampling interval: the walls' push on the water within 1.5 dx of the point along "
+      "the face (MPM: at the grid nodes; SPH: through the wall particles), over the open face area it stands "
+      "for, so that probes a cell apart along a wall carry its load cell's force; 0 when dry "
+      "(docs/results.md).",
       {string("name", "name, unique among the instruments").needed().eg("PS1"),
        vector("position", 2, 3, "a point on the face").needed().in_unit("m").note("inside the domain"),
        vector("normal", 2, 3, "the face's outward normal, out of the solid into the water (normalised)")

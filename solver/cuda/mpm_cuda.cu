@@ -953,7 +953,7 @@ class MpmCuda final : public Simulation, private mpm::SceneConstants<D, T> {
   // mirrors, refreshed lazily ---
   static constexpr bool kSumsOnDevice = true;
   // The pressure probes read the walls' push at the nodes (solver/mpm/probe_k.h), summed on the device.
-  static constexpr bool kProbesOnGrid = true;
+  static constexpr bool kProbesReadWallPush = true;
   const std::vector<double>& probe_push() const { return probe_push_; }
   template <class Term>
   void sum_particles(const Term& term, double* sum) const {
@@ -1091,6 +1091,7 @@ class MpmCuda final : public Simulation, private mpm::SceneConstants<D, T> {
     s.probes.point = s.probes.count ? raw(probe_geometry_) : nullptr;
     s.probes.normal = s.probes.count ? raw(probe_geometry_) + 3 * s.probes.count : nullptr;
     s.probes.dx = dx_;
+    s.probes.depth = mpm::kProbeDepthCells * dx_;
     if (has_sym_) {
       s.probes.sym_axis = sym_.axis;
       s.probes.sym_at = sym_.at;

@@ -66,12 +66,14 @@ inline std::vector<double> probe_geometry(const Scene& scene) {
   for (const auto& p : scene.instruments.pressure_probes) g.insert(g.end(), p.normal.begin(), p.normal.end());
   return g;
 }
-inline ProbeFaces probe_faces(const std::vector<double>& geometry, double dx, const SymmetryPlane* plane) {
+inline ProbeFaces probe_faces(const std::vector<double>& geometry, double dx, const SymmetryPlane* plane,
+                              double depth_cells = kProbeDepthCells) {
   ProbeFaces f;
   f.count = static_cast<int>(geometry.size() / 6);
   f.point = geometry.data();
   f.normal = geometry.data() + 3 * f.count;
   f.dx = dx;
+  f.depth = depth_cells * dx;
   if (plane) {
     f.sym_axis = plane->axis;
     f.sym_at = plane->at;

@@ -99,7 +99,7 @@ class MpmSolver final : public Simulation, private SceneConstants<D, T> {
   const Scene& scene() const { return scene_; }
   // The pressure probes read the walls' push at the nodes (mpm::add_probe_push): per probe, the last step's
   // sum of weight times push along its normal (N s).
-  static constexpr bool kProbesOnGrid = true;
+  static constexpr bool kProbesReadWallPush = true;
   const std::vector<double>& probe_push() const { return probe_push_; }
 
   // --- the energy audit (cpu_checkpoint.cpp) ---

@@ -10,19 +10,22 @@
 namespace flume::mpm {
 
 // How deep into the solid (cells, along the face's normal) and how far out into the water a node's push still
-// counts for a face: the walls act on nodes within about two cells inside (ghost and boundary nodes that the
-// water's stencils reach) and on nodes up to a cell outside a face between grid lines (the sub-cell cover).
+// counts for a face in MPM: the walls act on nodes within about two cells inside (ghost and boundary nodes
+// that the water's stencils reach) and on nodes up to a cell outside a face between grid lines (the sub-cell
+// cover). SPH's wall particles lie up to its wall's layers deep (ProbeFaces::depth).
 constexpr double kProbeDepthCells = 2.5;
 constexpr double kProbeReachCells = 1.0;
 
 // The probes as the grid update reads them: per probe a point on its face and the face's outward normal (3
-// doubles each), the grid's spacing, and the symmetry plane (axis, coordinate; axis -1: none), across which a
-// half-domain grid's pushes count again at their images.
+// doubles each), the grid's spacing (the B-spline's scale), how deep into the solid a push counts (m), and
+// the symmetry plane (axis, coordinate; axis -1: none), across which a half domain's pushes count again at
+// their images. The same sums serve SPH, whose walls push the water through their particles.
 struct ProbeFaces {
   const double* point = nullptr;
   const double* normal = nullptr;
   int count = 0;
   double dx = 0;
+  double depth = 0;
   int sym_axis = -1;
   double sym_at = 0;
 };
@@ -56,7 +59,7 @@ FLUME_HD double probe_node_weight(const ProbeFaces& f, int q, const double* x) {
     r[d] = x[d] - p[d];
     s += r[d] * n[d];
   }
-  if (s <= -kProbeDepthCells * f.dx || s > kProbeReachCells * f.dx) return 0.0;
+  if (s <= -f.depth || s > kProbeReachCells * f.dx) return 0.0;
   const int a = probe_normal_axis<D>(n);
   double w = 1;
   for (int d = 0; d < D && w > 0; ++d)

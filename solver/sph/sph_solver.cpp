@@ -22,6 +22,7 @@
 #include "solver/inflow.h"
 #include "solver/instruments.h"
 #include "solver/interleave_axes.h"
+#include "solver/mpm/boundaries.h"
 #include "solver/seeding.h"
 #include "solver/simulation.h"
 #include "solver/sph/boundary_particles.h"
@@ -276,6 +277,10 @@ class SphSolver final : public Simulation {
   T v(int d, size_t i) const { return v_[d][i]; }
   T volume(size_t i) const { return vol_[i]; }  // reference volume: the particle's mass over rho0
   double max_speed() const { return max_speed_; }
+  // The pressure probes read the walls' push through their particles (mpm::add_probe_push): per probe, the
+  // last step's sum of weight times push along its normal (N s).
+  static constexpr bool kProbesReadWallPush = true;
+  const std::vector<double>& probe_push() const { return probe_push_; }
 
   struct Energy {
     double kinetic = 0, potential = 0, elastic = 0, debris = 0;
@@ -531,6 +536,14 @@ class SphSolver final : public Simulation {
     for (int d = 0; d < D; ++d) vwe_[d] = vw_[d];
     for (int d = 0; d < D; ++d) fw_[d].assign(nw_, T(0));
     load_impulse_.assign(scene_.boundaries.size() * D, 0.0);
+    // The pressure probes sum the walls' push through their particles, which lie up to `layers` steps deep.
+    probe_geometry_ = mpm::probe_geometry(scene_);
+    mpm::SymmetryPlane plane;
+    plane.axis = mirror_.axis;
+    plane.at = mirror_.at;
+    probe_faces_ = mpm::probe_faces(probe_geometry_, scene_.solver.dx, mirror_.active() ? &plane : nullptr,
+                                    (layers + 0.5) * spacing_ / scene_.solver.dx);
+    probe_push_.assign(scene_.instruments.pressure_probes.size(), 0.0);
   }
 
   // The debris boxes' particles (sph/debris_particles.h), as deep as the walls', at the boxes' start poses.
@@ -982,6 +995,19 @@ class SphSolver final : public Simulation {
   }
 
   void add_wall_impulses(double dt) {
+    if (!probe_push_.empty()) {  // the push on the water is minus the water's force on the wall's particles
+      std::fill(probe_push_.begin(), probe_push_.end(), 0.0);
+      for (size_t k = 0; k < nw_; ++k) {
+        double x[D], push[D];
+        bool pushed = false;
+        for (int d = 0; d < D; ++d) {
+          x[d] = double(xw_[d][k]);
+          push[d] = -double(fw_[d][k]) * dt;
+          pushed = pushed || push[d] != 0.0;
+        }
+        if (pushed) mpm::add_probe_push<D>(probe_faces_, x, push, probe_push_.data());
+      }
+    }
     if (scene_.instruments.loads.empty()) return;
     for (size_t k = 0; k < nw_; ++k) {
       if (wall_id_[k] < 0) continue;
@@ -1065,6 +1091,9 @@ class SphSolver final : public Simulation {
   std::unique_ptr<InflowBoundary<D, T>> inflow_;
   sph::SphDebris<D, T> bodies_;
   std::vector<double> load_impulse_;
+  std::vector<double> probe_geometry_;  // the pressure probes' points and normals (mpm::probe_geometry)
+  mpm::ProbeFaces probe_faces_;         // a view of them
+  std::vector<double> probe_push_;      // per probe: this step's push through the wall particles
 
   double time_ = 0, dt_ = 0, max_speed_ = 0;
   long steps_ = 0, interactions_ = 0;
