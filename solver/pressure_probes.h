@@ -128,11 +128,11 @@ class PressureProbeSet {
   void step(const Solver& s, double t, double dt, bool force, Record& record) {
     if (clocks_.empty()) return;
     if constexpr (probes_read_wall_push<Solver>) {
+      // At t = 0 no step has pushed yet: the water is at rest, and the particles' pressure says so.
       if (dt > 0) {
         read_push(s, dt, now_);
       } else {
-        read(s,
-             now_);  // t = 0: no step has pushed yet; the water is at rest, as the particles' pressure says
+        read(s, now_);
       }
     } else {
       read(s, now_);
@@ -151,8 +151,8 @@ class PressureProbeSet {
     }
   }
 
-  // The pressure from the walls' push at the nodes (solver/mpm/probe_k.h): the push along the normal over the
-  // step and the open face area the probe's weights cover (probe_open_area).
+  // The pressure from the walls' push (solver/mpm/probe_k.h): the push along the normal over the step and the
+  // open face area the probe's weights cover (probe_open_area).
   void read_push(const Solver& s, double dt, std::vector<double>& out) const {
     const auto& probes = scene_.instruments.pressure_probes;
     const auto& push = s.probe_push();
@@ -163,8 +163,9 @@ class PressureProbeSet {
   // The face area behind a probe's reading of the walls' push: over the columns of pushing points its weights
   // reach (MPM: the grid's nodes, domain_lo + k dx on each axis across the normal; SPH: the wall particles'
   // lattice, (k + 1/2) s at its spacing s), each column's weight times the part of its face cell that is
-  // open, not inside another solid (sampled on an 8-point grid per axis, a quarter cell off the face into the
-  // water; across a symmetry plane at its image). Open everywhere this is one column's area times the
+  // open water in front of the face: not inside another solid, nor beyond the edge of a box's face (sampled
+  // on an 8-point grid per axis, a quarter cell off the face on either side; across a symmetry plane at its
+  // image). Open everywhere this is one column's area times the
   // weights' sum (1 over a lattice of dx, dx / s over one of s); next to a floor the row of nodes on it
   // carries the water of half a cell, and so counts half, so that a uniform pressure reads as itself up to
   // the corner.
@@ -204,20 +205,29 @@ class PressureProbeSet {
         for (int u = 0; u < kSub; ++u)
           for (int v = 0; v < (nt > 1 ? kSub : 1); ++v) {
             const double off[2] = {((u + 0.5) / kSub - 0.5) * step, ((v + 0.5) / kSub - 0.5) * step};
-            Vec3d q = p.position;
-            for (int d = 0; d < D; ++d) q[d] += 0.25 * dx * n[d];
+            // The face point, then a quarter cell in front of it (water's side) and behind it (the solid's).
+            Vec3d on = p.position;
             // Along the face: the axes across the normal move, the normal's axis follows the face's plane.
             for (int t = 0; t < nt; ++t) {
               const double along = node[t] + off[t] - p.position[across[t]];
-              q[across[t]] += along;
-              q[a] -= along * n[across[t]] / n[a];
+              on[across[t]] += along;
+              on[a] -= along * n[across[t]] / n[a];
+            }
+            Vec3d front = on, back = on;
+            for (int d = 0; d < D; ++d) {
+              front[d] += 0.25 * dx * n[d];
+              back[d] -= 0.25 * dx * n[d];
             }
             if (plane) {  // beyond a symmetry plane: its image
               const int sa = mpm::probe_normal_axis<3>(plane->shape.normal.data());
-              const double side = (q[sa] - plane->shape.point[sa]) * plane->shape.normal[sa];
-              if (side < 0) q[sa] = 2 * plane->shape.point[sa] - q[sa];
+              for (Vec3d* q : {&front, &back}) {
+                const double side = ((*q)[sa] - plane->shape.point[sa]) * plane->shape.normal[sa];
+                if (side < 0) (*q)[sa] = 2 * plane->shape.point[sa] - (*q)[sa];
+              }
             }
-            open += inside_solid(scene, q, false) ? 0 : 1;
+            // Open water in front of a solid face: not another solid's inside, nor past the edge of a box's
+            // face.
+            open += !inside_solid(scene, front, false) && inside_solid(scene, back, false) ? 1 : 0;
           }
         area += w * column * open / double(nt > 1 ? kSub * kSub : kSub);
       }

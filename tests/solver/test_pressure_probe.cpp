@@ -172,6 +172,38 @@ void check_probes_carry_the_load(const std::string& method) {
 TEST(PressureProbe, ProbesUpAWallCarryItsLoadInAnImpactMpm) { check_probes_carry_the_load("mpm"); }
 TEST(PressureProbe, ProbesUpAWallCarryItsLoadInAnImpactSph) { check_probes_carry_the_load("sph"); }
 
+// A probe 3 mm below a submerged box's top edge, on its side face (the box 6 cells thick, against the right
+// wall): the columns of pushing points above the edge have no face in front of them, so they count for no
+// area (probe_open_area) and the probe reads the still water's pressure there. Allowed: two cells of water,
+// one for the wall's own cell (as above) and one for the edge's node, which both faces hold, so that its push
+// mixes the side's pressure with the top's. Counting those columns as open face would read a third low (an
+// area of 1.0 column instead of 0.65).
+void check_probe_below_a_box_edge(const std::string& method) {
+  std::string text =
+      column_scene(method, R"({"name": "edge", "position": [0.04, 0.097], "boundary": "box"})", 0.2);
+  const std::string walls = R"({"name": "floor",)";
+  text.replace(text.find(walls), walls.size(),
+               R"({"name": "box", "type": "box", "lo": [0.04, 0.0], "hi": [0.1, 0.1]}, {"name": "floor",)");
+  const std::string water = R"("water": [{"lo": [0, 0], "hi": [0.1, 0.2], "hydrostatic": true}])";
+  ASSERT_NE(text.find(water), std::string::npos);
+  text.replace(text.find(water), water.size(),
+               R"("water": [{"lo": [0, 0], "hi": [0.04, 0.2], "hydrostatic": true},
+                            {"lo": [0.04, 0.1], "hi": [0.1, 0.2], "hydrostatic": true}])");
+  const Scene scene = parse_scene_text(text, "box_edge.json");
+  auto sim = make_simulation(scene, {Backend::kCpu, 1});
+  ASSERT_EQ(test::run_until(*sim, scene.solver.end_time), RunStatus::kOk) << sim->message();
+  const TimeSeries& ts = sim->record().pressures.at("edge");
+  double sum = 0;
+  int n = 0;
+  for (size_t i = 0; i < ts.size(); ++i)
+    if (ts.time[i] > 0.1 + 1e-9) sum += ts.at(i), ++n;
+  const double mean = sum / n, exact = kRho * kG * (kH - 0.097);
+  std::printf("%s below the box's edge: mean %.1f Pa (rho g depth %.1f)\n", method.c_str(), mean, exact);
+  EXPECT_NEAR(mean, exact, 2 * kRho * kG * kDx);
+}
+TEST(PressureProbe, BelowABoxEdgeMpm) { check_probe_below_a_box_edge("mpm"); }
+TEST(PressureProbe, BelowABoxEdgeSph) { check_probe_below_a_box_edge("sph"); }
+
 TEST(PressureProbe, BadInput) {
   expect_rejected(R"({"name": "out", "position": [0.5, 0.0], "normal": [0, 1]})",
                   "instruments.pressure_probes.0.position", "[-0.05, 0.15]");
