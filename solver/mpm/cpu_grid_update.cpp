@@ -16,7 +16,7 @@ namespace flume::mpm {
 template <int D, typename T, bool Flip>
 void MpmSolver<D, T, Flip>::update_node(const Lane& acc, long g, size_t idx, const int* node,
                                         bool near_debris, double load_weight, T dt, T inv_cell_volume,
-                                        double* my_impulse, double* my_probe_push,
+                                        double* my_impulse, std::vector<ProbeHit>* my_probe_hits,
                                         std::vector<CouplingNode>* my_coupling,
                                         std::vector<Ghost<D, T>>* my_ghosts) {
   const T m = acc[0];
@@ -39,13 +39,14 @@ void MpmSolver<D, T, Flip>::update_node(const Lane& acc, long g, size_t idx, con
       blocks_.g_bnd.data() + blocks_.g_bnd_start[g],
       static_cast<int>(blocks_.g_bnd_start[g + 1] - blocks_.g_bnd_start[g]), container_, my_impulse, found);
   if (probe_faces_.count > 0) {  // only nodes a wall acted on push
-    double push[D];
+    ProbeHit hit{idx, {}, {}};
     bool pushed = false;
     for (int d = 0; d < D; ++d) {
-      push[d] = load_weight * double(m) * (double(v[d]) - double(v_free[d]));
-      pushed = pushed || push[d] != 0.0;
+      hit.x[d] = xn[d];
+      hit.push[d] = load_weight * double(m) * (double(v[d]) - double(v_free[d]));
+      pushed = pushed || hit.push[d] != 0.0;
     }
-    if (pushed) mpm::add_probe_push<D>(probe_faces_, xn, push, my_probe_push);
+    if (pushed && within_probe_reach(xn)) my_probe_hits->push_back(hit);
   }
   if (found.found()) {
     ghost.idx = idx;
@@ -77,15 +78,16 @@ void MpmSolver<D, T, Flip>::grid_update(T dt) {
   const int nthreads = omp_get_max_threads();
   // A cache line (8 doubles) between one thread's load sums and the next's, wherever the buffer starts: a
   // shared line costs a transfer per wall node.
-  const size_t probes = probe_push_.size();
-  const size_t stride = walls_.size() * D + probes + 8;  // the loads, then the probes' pushes
+  const size_t stride = walls_.size() * D + 8;
   std::vector<double> impulse(static_cast<size_t>(nthreads) * stride, 0.0);
+  probe_hits_.resize(static_cast<size_t>(nthreads));
   if (debris_) debris_->begin_grid(nthreads);
   ghosts_.begin(nthreads);
 #pragma omp parallel
   {
     double* my_impulse = impulse.data() + static_cast<size_t>(omp_get_thread_num()) * stride;
-    double* my_probe_push = my_impulse + walls_.size() * D;
+    std::vector<ProbeHit>* my_probe_hits = &probe_hits_[omp_get_thread_num()];
+    my_probe_hits->clear();
     std::vector<CouplingNode>* my_coupling = debris_ ? debris_->thread_nodes(omp_get_thread_num()) : nullptr;
     std::vector<Ghost<D, T>>* my_ghosts = ghosts_.thread_list(omp_get_thread_num());
     my_ghosts->clear();
@@ -142,7 +144,7 @@ void MpmSolver<D, T, Flip>::grid_update(T dt) {
             continue;
           }
           update_node(acc[k], g, base + k, node, near_debris, 1.0, dt, inv_cell_volume, my_impulse,
-                      my_probe_push, my_coupling, my_ghosts);
+                      my_probe_hits, my_coupling, my_ghosts);
         }
       }
     if (has_sym_) {
@@ -169,7 +171,7 @@ void MpmSolver<D, T, Flip>::grid_update(T dt) {
         }
         // No debris near: a scene with a symmetry plane has none (setup_boundaries).
         update_node(a, g, static_cast<size_t>(g) * kNodes + k, node, false, side == 0 ? 0.5 : 1.0, dt,
-                    inv_cell_volume, my_impulse, my_probe_push, my_coupling, my_ghosts);
+                    inv_cell_volume, my_impulse, my_probe_hits, my_coupling, my_ghosts);
       }
     }
   }
@@ -177,8 +179,12 @@ void MpmSolver<D, T, Flip>::grid_update(T dt) {
   for (int t = 0; t < nthreads; ++t)
     for (size_t k = 0; k < load_impulse_.size(); ++k) load_impulse_[k] += impulse[t * stride + k];
   std::fill(probe_push_.begin(), probe_push_.end(), 0.0);
-  for (int t = 0; t < nthreads; ++t)
-    for (size_t q = 0; q < probes; ++q) probe_push_[q] += impulse[t * stride + walls_.size() * D + q];
+  if (!probe_push_.empty()) {
+    std::vector<ProbeHit> hits;
+    for (const auto& list : probe_hits_) hits.insert(hits.end(), list.begin(), list.end());
+    std::sort(hits.begin(), hits.end(), [](const ProbeHit& a, const ProbeHit& b) { return a.idx < b.idx; });
+    for (const ProbeHit& h : hits) mpm::add_probe_push<D>(probe_faces_, h.x, h.push, probe_push_.data());
+  }
   ghosts_.reflect(grid_, blocks_.gkeys, load_impulse_, probe_faces_, probe_push_);
   if (has_sym_) mirror_beyond_symmetry();
   if (debris_) debris_->couple(grid_.v, double(dt));
@@ -186,8 +192,9 @@ void MpmSolver<D, T, Flip>::grid_update(T dt) {
 
 #define FLUME_INSTANTIATE(D, T, Flip)                                                                      \
   template void MpmSolver<D, T, Flip>::update_node(const Lane&, long, size_t, const int*, bool, double, T, \
-                                                   T, double*, double*, std::vector<CouplingNode>*,        \
-                                                   std::vector<Ghost<D, T>>*);                             \
+                                                   T, double*,                                             \
+                                                   std::vector<typename MpmSolver<D, T, Flip>::ProbeHit>*, \
+                                                   std::vector<CouplingNode>*, std::vector<Ghost<D, T>>*); \
   template void MpmSolver<D, T, Flip>::grid_update(T);
 FLUME_MPM_SOLVER_VARIANTS(FLUME_INSTANTIATE)
 #undef FLUME_INSTANTIATE

@@ -107,6 +107,10 @@ class MpmSolver final : public Simulation, private SceneConstants<D, T> {
   const Energy& last_energy() const { return run_.last_energy; }
 
  private:
+  struct ProbeHit {  // a node's push within a pressure probe's reach (grid_update)
+    size_t idx;
+    double x[D], push[D];
+  };
   // --- set-up (cpu_solver.cpp, cpu_boundaries.cpp) ---
   void seed_particles();
   void setup_boundaries();
@@ -118,7 +122,7 @@ class MpmSolver final : public Simulation, private SceneConstants<D, T> {
   void p2g(T dt);                                              // cpu_p2g.cpp
   void grid_update(T dt);                                      // cpu_grid_update.cpp
   void update_node(const Lane& acc, long g, size_t idx, const int* node, bool near_debris, double load_weight,
-                   T dt, T inv_cell_volume, double* my_impulse, double* my_probe_push,
+                   T dt, T inv_cell_volume, double* my_impulse, std::vector<ProbeHit>* my_probe_hits,
                    std::vector<CouplingNode>* my_coupling,
                    std::vector<Ghost<D, T>>* my_ghosts);  // cpu_grid_update.cpp
   void mirror_beyond_symmetry();                          // cpu_boundaries.cpp
@@ -156,6 +160,19 @@ class MpmSolver final : public Simulation, private SceneConstants<D, T> {
   std::vector<double> probe_geometry_;  // the pressure probes' points and normals (mpm::probe_geometry)
   ProbeFaces probe_faces_;              // a view of them
   std::vector<double> probe_push_;      // per probe: this step's push (mpm::add_probe_push)
+  // The pushes within a probe's reach, per thread, summed afterwards in node order: the probes' readings then
+  // do not depend on the thread count (as the particles' sums do not).
+  std::vector<std::vector<ProbeHit>> probe_hits_;
+  bool within_probe_reach(const double* x) const {
+    double image[D];
+    for (int d = 0; d < D; ++d) image[d] = x[d];
+    if (has_sym_) image[sym_.axis] = 2 * sym_.at - x[sym_.axis];
+    for (int q = 0; q < probe_faces_.count; ++q)
+      if (probe_node_weight<D>(probe_faces_, q, x) > 0 ||
+          (has_sym_ && probe_node_weight<D>(probe_faces_, q, image) > 0))
+        return true;
+    return false;
+  }
   GhostReflection<D, T> ghosts_;
   bool has_sym_ = false;
   SymmetryPlane sym_;
