@@ -165,10 +165,9 @@ class PressureProbeSet {
   // lattice, (k + 1/2) s at its spacing s), each column's weight times the part of its face cell that is
   // open water in front of the face: not inside another solid, nor beyond the edge of a box's face (sampled
   // on an 8-point grid per axis, a quarter cell off the face on either side; across a symmetry plane at its
-  // image). Open everywhere this is one column's area times the
-  // weights' sum (1 over a lattice of dx, dx / s over one of s); next to a floor the row of nodes on it
-  // carries the water of half a cell, and so counts half, so that a uniform pressure reads as itself up to
-  // the corner.
+  // image). Open everywhere this is one column's area times the weights' sum (1 over a lattice of dx, dx / s
+  // over one of s); next to a floor the row of nodes on it carries the water of half a cell, and so counts
+  // half, so that a uniform pressure reads as itself up to the corner.
   static double probe_open_area(const Scene& scene, const PressureProbe& p) {
     const int D = scene.dimension;
     const double dx = scene.solver.dx;

@@ -416,12 +416,8 @@ struct GridUpdate {
                                                    nullptr, s.n_walls, s.container, s.impulse, found);
     if (s.probes.count > 0) {  // only nodes a wall acted on push
       double push[D];
-      bool pushed = false;
-      for (int d = 0; d < D; ++d) {
-        push[d] = load_weight * double(m) * (double(v[d]) - double(v_free[d]));
-        pushed = pushed || push[d] != 0.0;
-      }
-      if (pushed) mpm::add_probe_push<D>(s.probes, xn, push, s.probe_push);
+      if (mpm::node_wall_push<D>(load_weight, m, v, v_free, push))
+        mpm::add_probe_push<D>(s.probes, xn, push, s.probe_push);
     }
     s.ghost_mirror[idx] = -1;
     if (found.found()) {

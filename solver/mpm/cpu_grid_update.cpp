@@ -40,13 +40,9 @@ void MpmSolver<D, T, Flip>::update_node(const Lane& acc, long g, size_t idx, con
       static_cast<int>(blocks_.g_bnd_start[g + 1] - blocks_.g_bnd_start[g]), container_, my_impulse, found);
   if (probe_faces_.count > 0) {  // only nodes a wall acted on push
     ProbeHit hit{idx, {}, {}};
-    bool pushed = false;
-    for (int d = 0; d < D; ++d) {
-      hit.x[d] = xn[d];
-      hit.push[d] = load_weight * double(m) * (double(v[d]) - double(v_free[d]));
-      pushed = pushed || hit.push[d] != 0.0;
-    }
-    if (pushed && within_probe_reach(xn)) my_probe_hits->push_back(hit);
+    for (int d = 0; d < D; ++d) hit.x[d] = xn[d];
+    if (mpm::node_wall_push<D>(load_weight, m, v, v_free, hit.push) && within_probe_reach(xn))
+      my_probe_hits->push_back(hit);
   }
   if (found.found()) {
     ghost.idx = idx;

@@ -67,6 +67,18 @@ FLUME_HD double probe_node_weight(const ProbeFaces& f, int q, const double* x) {
   return w;
 }
 
+// The walls' push on the water at a node in the step (N s, times the node's load weight): its momentum after
+// mpm::apply_boundaries less before (v_free). False when no wall acted on it, so only those nodes are summed.
+template <int D, typename T>
+FLUME_HD bool node_wall_push(double load_weight, T m, const T* v, const T* v_free, double* push) {
+  bool pushed = false;
+  for (int d = 0; d < D; ++d) {
+    push[d] = load_weight * double(m) * (double(v[d]) - double(v_free[d]));
+    pushed = pushed || push[d] != 0.0;
+  }
+  return pushed;
+}
+
 // Adds to each probe's sum the normal part of `push` (N s: the impulse the walls gave the water at the node
 // at x in the step, times the node's load weight) by the node's weight, and, with a symmetry plane, the same
 // for the node's image across it (the half grid's missing half).
