@@ -80,8 +80,10 @@ class InflowBoundary {
       : f_(scene.inflow), fluid_(scene.fluid), law_(scene.fluid.bulk_modulus, scene.fluid.gamma), a_(a), s_(spacing) {
     x_in_ = f_.x_m;
     lb_ = f_.buffer_cells * scene.solver.dx;
+    // The floor under the plane's middle: at its edge (y_lo) a side wall's box would count as the ground.
     Vec3d at{};
     at[0] = x_in_;
+    if constexpr (D == 3) at[1] = 0.5 * (f_.y_lo + f_.y_hi);
     floor_ = ground_level(scene, at);
     for (int d = 0; d < D; ++d) g_[d] = scene.solver.gravity[d];
     g_up_ = std::fabs(scene.solver.gravity[D - 1]);

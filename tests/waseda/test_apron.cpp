@@ -201,6 +201,45 @@ TEST(Apron, SphInflowInjectsTheRecordedFlux) {
   fs::remove_all(dir);
 }
 
+// (c) In 3D the inflow stands on the ground under the middle of its plane: a channel between two boxes whose
+// faces bound the plane's lateral extent exactly (y_m = [0, 0.24], the boxes end and begin there). Read at
+// the plane's edge, the side box's top (0.3 m) was taken for the floor and the water entered above it. Every
+// particle near the plane must lie below the record's highest level by at most a particle spacing.
+TEST(Apron, InflowStandsOnTheFloorBetweenSideBoxes) {
+  const fs::path dir = temp_dir("side_boxes");
+  double q = 0, h_max = 0;
+  const std::string rec = write_record(dir, false, 0.5, 0.2, &q, &h_max);
+  const std::string text =
+      R"({"name": "channel3", "dimension": 3, "domain": {"lo": [0.2, -0.2, -0.08], "hi": [2.0, 0.44, 0.6], "walls": "slip"},
+    "boundaries": [{"name": "floor", "type": "half_space", "point": [0, 0, 0], "normal": [0, 0, 1], "condition": "slip"},
+                   {"name": "left", "type": "box", "lo": [0.2, -0.2, -0.08], "hi": [2.0, 0.0, 0.3], "condition": "slip"},
+                   {"name": "right", "type": "box", "lo": [0.2, 0.24, -0.08], "hi": [2.0, 0.44, 0.3], "condition": "slip"}],
+    "water": [{"lo": [1.8, 0, 0], "hi": [1.9, 0.24, 0.04]}],
+    "inflow": {"record": ")" +
+      rec + R"(", "section": "s", "x_m": 0.5, "y_m": [0.0, 0.24]},
+    "solver": {"dx": 0.04, "ppc": 8, "end_time": 0.2, "precision": "double"},
+    "fluid": {"density": 998, "bulk_modulus": 2e6, "gamma": 7.125, "jbar_psi": 0.9}})";
+  const Scene scene = parse_scene_text(text, "channel3");
+  auto sim = make_simulation(scene, {});
+  ASSERT_EQ(test::run_until(*sim, 0.2), RunStatus::kOk) << sim->message();
+  std::vector<double> xyz;
+  sim->particle_positions(xyz);
+  const double s = scene.solver.dx / 2;
+  double top = 0;
+  size_t near_plane = 0;
+  for (size_t i = 0; i < xyz.size() / 3; ++i)
+    if (xyz[3 * i] < 1.0) {
+      top = std::max(top, xyz[3 * i + 2]);
+      ++near_plane;
+    }
+  std::printf(
+      "%zu particles within 0.5 m of the plane, the highest at z = %.3f m (record's highest level %.3f m)\n",
+      near_plane, top, h_max);
+  EXPECT_GT(near_plane, 0u);
+  EXPECT_LT(top, h_max + s);
+  fs::remove_all(dir);
+}
+
 TEST(Apron, BadRecordsAreInputErrors) {
   const fs::path dir = temp_dir("bad");
   auto field_of = [](const std::string& text) -> std::string {
