@@ -49,8 +49,9 @@ const ObjectDoc& solver_doc() {
               "MPM: share of each particle's own velocity kept through the step (FLIP), against APIC's")
            .in(0, 0.99)
            .def(0.0)
-           .note("0: APIC, whose every transfer damps what the grid cannot hold, so that the flow under the "
-                 "sluice gate slows as the step shrinks (docs/solver.md, \"The transfer's loss per step\")"),
+           .note("0: APIC, whose every transfer damps what the grid cannot hold: a loss per step, so that "
+                 "the flow under the sluice gate slows as the step shrinks and a structure resolved by a few "
+                 "cells holds the water back (docs/solver.md, \"The transfer's loss per step\")"),
        choice("precision", {"float", "double"}, "floating-point precision of the particles and grid")
            .def("double"),
        number("end_time", "simulated time at which the run ends")
