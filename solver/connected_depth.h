@@ -41,7 +41,6 @@ double connected_elevation(const Solver& s, const Scene& scene, const Gauge& g, 
                            std::vector<double>& heights) {
   const int D = s.dim(), up = D - 1;
   const double dx = scene.solver.dx;
-  const int per_axis = std::max(1, static_cast<int>(std::lround(std::pow(scene.solver.ppc, 1.0 / D))));
   heights.clear();
   const double lowest = ground - 0.25 * dx;  // water below the ground here is beside the gauge, not under it
   for (size_t i = 0; i < s.n(); ++i) {
@@ -51,7 +50,7 @@ double connected_elevation(const Solver& s, const Scene& scene, const Gauge& g, 
     for (int d = 0; d < up && in; ++d) in = std::fabs(double(s.x(d, i)) - g.position[d]) < 0.5 * dx;
     if (in) heights.push_back(z);
   }
-  return connected_surface(heights, ground, dx, dx / per_axis);
+  return connected_surface(heights, ground, dx, particle_spacing(scene));
 }
 
 }  // namespace flume

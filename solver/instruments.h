@@ -65,8 +65,7 @@ inline bool gauge_image(const Scene& s, const Vec3d& position, Vec3d& image) {
 inline double gauge_open_fraction(const Scene& s, const Vec3d& position, double ground) {
   const int up = s.dimension - 1;
   const double dx = s.solver.dx;
-  const int per_axis = std::max(1, static_cast<int>(std::lround(std::pow(s.solver.ppc, 1.0 / s.dimension))));
-  const double spacing = dx / per_axis;
+  const double spacing = particle_spacing(s);
   // Lattice points within the footprint on each horizontal axis.
   std::vector<double> pts[2];
   for (int d = 0; d < up; ++d) {

@@ -172,8 +172,7 @@ class PressureProbeSet {
     const int D = scene.dimension;
     const double dx = scene.solver.dx;
     const bool sph = scene.solver.method == SolverMethod::kSph;
-    const int per_axis = std::max(1, static_cast<int>(std::lround(std::pow(scene.solver.ppc, 1.0 / D))));
-    const double step = sph ? dx / per_axis : dx;  // the lattice of the points that push
+    const double step = sph ? particle_spacing(scene) : dx;  // the lattice of the points that push
     const double* n = p.normal.data();
     const int a = D == 3 ? mpm::probe_normal_axis<3>(n) : mpm::probe_normal_axis<2>(n);
     const double column = D == 3 ? mpm::probe_column_area<3>(n, step) : mpm::probe_column_area<2>(n, step);

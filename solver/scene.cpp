@@ -46,7 +46,7 @@ constexpr double kMaxCellsPerAxis = 4.0e6;         // block keys pack 21 bits pe
 // in double so that a dx of 1e-9 m cannot overflow the count.
 void check_allocation_bounds(const Scene& sc, Reader& root, int dim) {
   const auto& s = sc.solver;
-  const double per_axis = std::round(std::pow(s.ppc, 1.0 / dim));
+  const double per_axis = particles_per_axis(s.ppc, dim);
   const double spacing = s.dx / per_axis;
   for (int d = 0; d < dim; ++d) {
     const double cells = (sc.domain_hi[d] - sc.domain_lo[d]) / s.dx;
@@ -463,7 +463,7 @@ Scene parse(const json& root_json, const std::string& file) {
     s.dx = r.number("dx", Bounds{0.0, min_extent / 4, true, false});
     s.ppc = static_cast<int>(r.integer_or("ppc", dim == 2 ? 4 : 8));
     s.max_particles = static_cast<int>(r.integer("max_particles"));
-    const int per_axis = static_cast<int>(std::lround(std::pow(s.ppc, 1.0 / dim)));
+    const int per_axis = particles_per_axis(s.ppc, dim);
     int p = 1;
     for (int d = 0; d < dim; ++d) p *= per_axis;
     if (p != s.ppc)

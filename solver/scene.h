@@ -2,6 +2,7 @@
 // No JSON type travels past scene.cpp. Frame: the last axis is vertical (z up in 3D, (x, z) in 2D).
 #pragma once
 #include <array>
+#include <cmath>
 #include <optional>
 #include <string>
 #include <vector>
@@ -231,6 +232,17 @@ struct Scene {
   DebrisSettings debris;
   InflowSettings inflow;
 };
+
+// Particles per cell along one axis, ppc^(1/D) (load_scene requires a whole number), and the spacing of the
+// lattice they are seeded on, dx / ppc^(1/D): SPH's particle size, and the scale the instruments read water
+// at.
+inline int particles_per_axis(int ppc, int dim) {
+  const long n = std::lround(std::pow(double(ppc), 1.0 / dim));
+  return n < 1 ? 1 : static_cast<int>(n);
+}
+inline double particle_spacing(const Scene& s) {
+  return s.solver.dx / particles_per_axis(s.solver.ppc, s.dimension);
+}
 
 // Reads, overrides and validates a scene. Throws flume::InputError naming the file, the field path and
 // what is allowed. Unknown fields are errors (a typo in a campaign's parameter path must not pass silently).

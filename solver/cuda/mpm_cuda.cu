@@ -986,8 +986,7 @@ class MpmCuda final : public Simulation, private mpm::SceneConstants<D, T> {
   // As MpmSolver::seed_particles: a regular lattice of ppc^(1/D) particles per cell per axis in each water
   // box, hydrostatically preloaded where asked.
   void seed_particles() {
-    const int per_axis = static_cast<int>(std::lround(std::pow(scene_.solver.ppc, 1.0 / D)));
-    spacing_ = dx_ / per_axis;
+    spacing_ = particle_spacing(scene_);
     rho_ = scene_.fluid.density;
     // Water is not seeded inside a debris box: the box displaces it.
     const Seeds seeds = seed_water<D>(scene_, spacing_, displaced_by<D>(debris_.get()));

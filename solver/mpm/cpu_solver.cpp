@@ -64,8 +64,7 @@ RunStatus MpmSolver<D, T, Flip>::step() {
 
 template <int D, typename T, bool Flip>
 void MpmSolver<D, T, Flip>::seed_particles() {
-  const int per_axis = static_cast<int>(std::lround(std::pow(scene_.solver.ppc, 1.0 / D)));
-  spacing_ = dx_ / per_axis;
+  spacing_ = particle_spacing(scene_);
   rho_ = scene_.fluid.density;
   // Water is not seeded inside a debris box: the box displaces it.
   const Seeds seeds =

@@ -54,7 +54,7 @@ inline Scene free_blob(int dim, double dx, double half, double bulk_modulus = 2.
 inline void rigid_box_angular_momentum(const Scene& scene, double M, const double omega[3], double L[3]) {
   const int D = scene.dimension;
   const auto& box = scene.water.at(0);
-  const double spacing = scene.solver.dx / std::lround(std::pow(scene.solver.ppc, 1.0 / D));
+  const double spacing = particle_spacing(scene);
   double S[3] = {0, 0, 0};
   for (int d = 0; d < D; ++d) {
     const double len = box.hi[d] - box.lo[d];
