@@ -55,8 +55,7 @@ class SphSolver final : public Simulation {
  public:
   SphSolver(const Scene& scene, const SimulationOptions& options) : scene_(scene), instruments_(scene_) {
     if (options.threads > 0) omp_set_num_threads(options.threads);
-    const int per_axis = static_cast<int>(std::lround(std::pow(scene.solver.ppc, 1.0 / D)));
-    spacing_ = scene.solver.dx / per_axis;
+    spacing_ = particle_spacing(scene);
     setup_params();
     if (scene.debris.present) debris_ = std::make_unique<DebrisCoupling>(scene);
     seed_fluid();
@@ -544,6 +543,23 @@ class SphSolver final : public Simulation {
     probe_faces_ = mpm::probe_faces(probe_geometry_, scene_.solver.dx, mirror_.active() ? &plane : nullptr,
                                     (layers + 0.5) * spacing_ / scene_.solver.dx);
     probe_push_.assign(scene_.instruments.pressure_probes.size(), 0.0);
+    // The wall particles some probe weighs (the walls do not move): the only ones add_wall_impulses visits
+    // for the probes.
+    probe_walls_.clear();
+    std::vector<double> weighs(probe_push_.size());
+    for (size_t k = 0; k < nw_ && !weighs.empty(); ++k) {
+      double x[D];
+      for (int d = 0; d < D; ++d) x[d] = double(xw_[d][k]);
+      bool weighed = false;
+      for (int a = 0; a < D && !weighed; ++a) {  // a push along each axis alone, so that none cancels another
+        double unit[D] = {};
+        unit[a] = 1;
+        std::fill(weighs.begin(), weighs.end(), 0.0);
+        mpm::add_probe_push<D>(probe_faces_, x, unit, weighs.data());
+        weighed = std::any_of(weighs.begin(), weighs.end(), [](double w) { return w != 0.0; });
+      }
+      if (weighed) probe_walls_.push_back(k);
+    }
   }
 
   // The debris boxes' particles (sph/debris_particles.h), as deep as the walls', at the boxes' start poses.
@@ -997,7 +1013,7 @@ class SphSolver final : public Simulation {
   void add_wall_impulses(double dt) {
     if (!probe_push_.empty()) {  // the push on the water is minus the water's force on the wall's particles
       std::fill(probe_push_.begin(), probe_push_.end(), 0.0);
-      for (size_t k = 0; k < nw_; ++k) {
+      for (const size_t k : probe_walls_) {
         double x[D], push[D];
         bool pushed = false;
         for (int d = 0; d < D; ++d) {
@@ -1094,6 +1110,7 @@ class SphSolver final : public Simulation {
   std::vector<double> probe_geometry_;  // the pressure probes' points and normals (mpm::probe_geometry)
   mpm::ProbeFaces probe_faces_;         // a view of them
   std::vector<double> probe_push_;      // per probe: this step's push through the wall particles
+  std::vector<size_t> probe_walls_;     // the wall particles within some probe's reach
 
   double time_ = 0, dt_ = 0, max_speed_ = 0;
   long steps_ = 0, interactions_ = 0;
