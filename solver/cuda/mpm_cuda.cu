@@ -136,7 +136,7 @@ struct View {
   const uint64_t* gkeys;
   T* grid;  // channels x nodes, channel-major
   int channels;  // kChannels, or kMaxChannels with FLIP
-  T flip;        // mpm::flip_velocity's alpha
+  T flip;        // mpm::flip_velocity's alpha for this step (mpm::flip_for_step)
   uint8_t* gwall;  // per node: the axes its walls hold (mpm::apply_boundaries), all of them on a moving box
   int64_t* ghost_mirror;  // per node: its reflection's grid index (mpm::ghost_half_space), or -1
   uint8_t* ghost_axes;    // per node: the normal axes the reflection keeps
@@ -834,7 +834,8 @@ class MpmCuda final : public Simulation, private mpm::SceneConstants<D, T> {
     const double dt = run_.next_dt(scene_, dx_, c_);
     if (dt == 0) return run_.status;
     if (needs_sort_) sort_particles();
-    const V s = view();
+    V s = view();
+    s.flip = T(mpm::flip_for_step(double(flip_), dt, dx_, c_));
     thr::fill(thr::device, grid_.begin(), grid_.end(), T(0));
     if (has_loads_) thr::fill(thr::device, impulse_.begin(), impulse_.end(), 0.0);
     if (s.probes.count) thr::fill(thr::device, probe_push_d_.begin(), probe_push_d_.end(), 0.0);

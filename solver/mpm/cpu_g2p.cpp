@@ -31,7 +31,7 @@ void MpmSolver<D, T, Flip>::g2p(T dt) {
   // of type T, which the compiler would then reload (and the Tait law's set-up redo) for every particle.
   const mpm::TaitLaw<T> law = law_;
   const T inv_dx = inv_dx_;
-  const T flip = flip_;
+  const T flip = T(mpm::flip_for_step(double(flip_), double(dt), dx_, c_));
   mpm::G2pConstants<D, T> g2p_k;
   g2p_k.dt = dt;
   g2p_k.psi = psi_;

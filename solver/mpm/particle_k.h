@@ -49,6 +49,17 @@ FLUME_HD T flip_velocity(T v_grid_new, T v_particle, T v_grid_old, T alpha) {
   return v_grid_new + alpha * (v_particle - v_grid_old);
 }
 
+// alpha for a step of dt (host code of both backends): solver.flip is the share kept over the reference step
+// kFlipReferenceCfl dx / c, and a step of dt keeps flip^(dt / dt_ref), so that the share of the transfer's
+// loss kept over a second does not depend on the step. A share fixed per step damped a fixed part of the loss
+// at every step, so the water under the sluice gate and past a pier still changed with the step
+// (docs/solver.md, "A blend per second"). flip 0 (APIC) stays 0.
+constexpr double kFlipReferenceCfl = 0.4;
+inline double flip_for_step(double flip, double dt, double dx, double sound_speed) {
+  if (!(flip > 0)) return 0;
+  return std::pow(flip, dt * sound_speed / (kFlipReferenceCfl * dx));
+}
+
 // The constants of G2P's particle update, the same for every particle of a step.
 template <int D, typename T>
 struct G2pConstants {
