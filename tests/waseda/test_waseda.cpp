@@ -272,9 +272,9 @@ double step_ratio(const char* flip, const char* large, const char* small) {
 // velocity the grid cannot hold; in the jet under the gate that part is large, so halving the step (CFL 0.4
 // -> 0.2) cut the volume past the gate in the first second from 0.166 to 0.155 m^3/m (-6.7 %; at CFL 0.1,
 // 0.131), where with the gate fully open the two agree to 0.3 %. FLIP keeps that part (solver.flip,
-// mpm::flip_velocity): at 0.9 the two steps pass 0.181 and 0.176 (docs/solver.md, "The transfer's loss per
-// step"). Tolerance: the discharge reads to 5 % at this resolution (the test above), and the step must not
-// move it more.
+// mpm::flip_velocity): at 0.9 the two steps pass 0.181 and 0.179 (0.176 with the share kept per step;
+// docs/solver.md, "The transfer's loss per step"). Tolerance: the discharge reads to 5 % at this resolution
+// (the test above), and the step must not move it more.
 TEST(Waseda, GateDischargeDoesNotDependOnTheStepWithFlip) {
   EXPECT_NEAR(step_ratio("0.9", "0.4", "0.2"), 1.0, 0.05);
 }
