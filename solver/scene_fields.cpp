@@ -46,9 +46,8 @@ const ObjectDoc& solver_doc() {
            .def(100000000),
        number("cfl", "CFL number of the adaptive time step").above(0).at_most(10).def(0.4),
        number("flip",
-              "MPM: share of each particle's own velocity kept (FLIP), against APIC's, over a step of 0.4 dx "
-              "/ c; "
-              "a step of dt keeps flip^(dt c / (0.4 dx)), the same share per second at any CFL")
+              "MPM: share of each particle's own velocity kept (FLIP), against APIC's, over a step of "
+              "0.4 dx / c; a step of dt keeps flip^(dt c / (0.4 dx)), the same share per second at any CFL")
            .in(0, 0.99)
            .def(0.0)
            .note("0: APIC, whose every transfer damps what the grid cannot hold: a loss per step, so that "

@@ -96,7 +96,7 @@ TEST(Structures, PierInAStreamWithFlipTakesAtMostTheStagnationHeadsDrag) {
   }
   depth /= m;
   flux /= m;
-  const double u = flux / depth, s = scene.solver.dx / 2;
+  const double u = flux / depth, s = particle_spacing(scene);
   const double E = depth + u * u / (2 * kG), tol_h = s * s * s / (scene.solver.dx * scene.solver.dx);
   const double bound = 0.5 * kRho * kG * (E + tol_h) * (E + tol_h) * P;
   const double floor_force = 0.5 * kRho * kG * depth * depth * P;  // the stream's own hydrostatic push

@@ -224,7 +224,7 @@ TEST(Apron, InflowStandsOnTheFloorBetweenSideBoxes) {
   ASSERT_EQ(test::run_until(*sim, 0.2), RunStatus::kOk) << sim->message();
   std::vector<double> xyz;
   sim->particle_positions(xyz);
-  const double s = scene.solver.dx / 2;
+  const double s = particle_spacing(scene);
   double top = 0;
   size_t near_plane = 0;
   for (size_t i = 0; i < xyz.size() / 3; ++i)
