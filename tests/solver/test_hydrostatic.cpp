@@ -170,8 +170,8 @@ TEST(StillTank, KeepsItsVolume3D) {
 // (dx / 2 at ppc 4), over 2 s. The first fluid node off a wall feels the pressure of the particles on its fluid
 // side only; without the side walls' image push (mpm::ghost_exchange) the water crowded along both walls until its
 // compression balanced that, and the surface half a cell from a wall stood 15 mm above still water after 2 s
-// (12 mm at dx 0.04 m, while the middle sank 1.2 mm; J-bar psi 0.9). With it, +3.0 mm (+0.9 mm when the floor
-// pushed too, which mpm::image_push_axes says why it does not).
+// (12 mm at dx 0.04 m, while the middle sank 1.2 mm; J-bar psi 0.9). With it the surface stays within a tenth
+// of a millimetre (docs/validation.md, section 1); mpm::image_push_axes says why floors do not push.
 TEST(StillTank, SurfaceStaysLevelAgainstSlipWalls2D) {
   const Scene scene = parse_scene_text(R"({
     "name": "tank", "dimension": 2,
