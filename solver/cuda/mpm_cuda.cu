@@ -1053,8 +1053,7 @@ class MpmCuda final : public Simulation, private mpm::SceneConstants<D, T> {
     s.p_nbr = raw(p_nbr_);
     s.gkeys = raw(gkeys_);
     s.grid = raw(grid_);
-    s.channels = channels_;
-    s.flip = flip_;
+    s.channels = channels_;  // s.flip is the step's (MpmCuda::step, mpm::flip_for_step)
     s.gwall = raw(gwall_);
     s.ghost_mirror = raw(ghost_mirror_);
     s.ghost_axes = raw(ghost_axes_);

@@ -272,17 +272,16 @@ double step_ratio(const char* flip, const char* large, const char* small) {
 // velocity the grid cannot hold; in the jet under the gate that part is large, so halving the step (CFL 0.4
 // -> 0.2) cut the volume past the gate in the first second from 0.166 to 0.155 m^3/m (-6.7 %; at CFL 0.1,
 // 0.131), where with the gate fully open the two agree to 0.3 %. FLIP keeps that part (solver.flip,
-// mpm::flip_velocity): at 0.9 the two steps pass 0.181 and 0.179 (0.176 with the share kept per step;
-// docs/solver.md, "The transfer's loss per step"). Tolerance: the discharge reads to 5 % at this resolution
-// (the test above), and the step must not move it more.
+// mpm::flip_velocity): at 0.9 the two steps pass 0.181 and 0.179 (docs/solver.md, "The transfer's loss per
+// step"). Tolerance: the discharge reads to 5 % at this resolution (the test above), and the step must not
+// move it more.
 TEST(Waseda, GateDischargeDoesNotDependOnTheStepWithFlip) {
   EXPECT_NEAR(step_ratio("0.9", "0.4", "0.2"), 1.0, 0.05);
 }
 
-// The blend is a share per second, not per step (mpm::flip_for_step). Kept per step, flip 0.5 passed 0.1721
-// m^3/m at CFL 0.4 and 0.1491 at CFL 0.1 (0.866: each step damps a fixed part of the loss, so more steps damp
-// more); per second, 0.1724 and 0.1652 (docs/solver.md, "A blend per second").
-// Tolerance: the 5 % the discharge reads to at this resolution, as above.
+// The blend is a share per second, not per step (mpm::flip_for_step): a share kept per step damps a fixed part
+// of the loss at every step, so more steps damp more, and this ratio fell to 0.87 (docs/solver.md, "A blend per
+// second"). Tolerance: the 5 % the discharge reads to at this resolution, as above.
 TEST(Waseda, GateDischargeWithAHalfBlendDoesNotDependOnTheStep) {
   EXPECT_NEAR(step_ratio("0.5", "0.4", "0.1"), 1.0, 0.05);
 }
