@@ -1,8 +1,8 @@
-// One point's sums over its neighbours of one kind, only its own side, written for the CPU's vector units as
-// fluid_pair_lanes.h is: the neighbours within the support are listed first (lanes.h), then one branch-free
-// loop evaluates sph_kernels.h's pair functions into per-neighbour slots, summed in a fixed order. Used for a
-// fluid particle's walls and boxes, a wall particle's water (its density rate and load), and mDBC's ghost
-// nodes.
+// One point's sums over its neighbours of one kind, written for the CPU's vector units as fluid_pair_lanes.h
+// is: the neighbours within the support are listed first (lanes.h), then one branch-free loop evaluates
+// sph_kernels.h's pair functions into per-neighbour slots, summed in a fixed order. Used for a fluid
+// particle's boxes (and, at its mirror image, its walls), a wall particle's water (its density rate and load,
+// and the water's side of the same pairs), a box particle's water, and mDBC's ghost nodes.
 #pragma once
 #include <cstdint>
 
@@ -13,10 +13,12 @@ namespace flume::sph {
 
 // The point (position x, velocity v, density rho, 1/rho ir, pressure p) against the particles of `B` that
 // `ranges(f)` offers as contiguous ranges f(b0, b1): pair_common's terms (and the shifting's with kShift)
-// added to A.
-template <int D, typename T, bool kShift, class Ranges>
+// added to A. With kScatter each pair is evaluated for both sides at once: the point is a particle of mass m,
+// and each neighbour's terms are added to its own sums, b_sums[b] (a wall particle's pairs with the water,
+// which then needs no gather over the walls of its own).
+template <int D, typename T, bool kShift, bool kScatter = false, class Ranges>
 void gather_pairs(const Params<T>& params, const NeighbourView<D, T>& view, const T* x, const T* v, T rho,
-                  T ir, T p, const Ranges& ranges, Accum<D, T>& A) {
+                  T ir, T p, const Ranges& ranges, Accum<D, T>& A, T m = T(0), Accum<D, T>* b_sums = nullptr) {
   constexpr int N = 128;
   [[maybe_unused]] constexpr int kAcc = 0, kDrho = D, kGradc = D + 1, kDivr = 2 * D + 1, kFields = 2 * D + 2;
   // Local copies: loads the compiler sees are neither written in the loop nor guarded by a condition.
@@ -24,20 +26,10 @@ void gather_pairs(const Params<T>& params, const NeighbourView<D, T>& view, cons
   const NeighbourView<D, T> B = view;
   uint32_t nb[N];
   int n = 0;
-  auto flush = [&] {
+  // The terms of one side of each pair, one slot per neighbour.
+  struct Side {
     T f[kFields][N], visc[N];
-    for (int l = 0; l < n; ++l) {
-      const int b = static_cast<int>(nb[l]);
-      T rab[D], vab[D], r2 = 0;
-      for (int d = 0; d < D; ++d) {
-        rab[d] = x[d] - B.x[d][b];
-        vab[d] = v[d] - B.v[d][b];
-        r2 += rab[d] * rab[d];
-      }
-      const T F = wendland_gradient_factor(r2, P);
-      Accum<D, T> S;
-      pair_common<D, T>(P, rab, r2, F, vab, rho, ir, p, B.rho[b], B.inv_rho[b], B.p[b], B.mass[b], S);
-      if constexpr (kShift) pair_shift<D, T>(rab, r2, F, B.mass[b] * B.inv_rho[b], S);
+    void keep(int l, const Accum<D, T>& S) {
       for (int d = 0; d < D; ++d) f[kAcc + d][l] = S.acc[d];
       f[kDrho][l] = S.drho;
       if constexpr (kShift) {
@@ -46,15 +38,44 @@ void gather_pairs(const Params<T>& params, const NeighbourView<D, T>& view, cons
       }
       visc[l] = S.visc_dt;
     }
-    for (int d = 0; d < D; ++d) A.acc[d] += lane_sum(f[kAcc + d], n);
-    A.drho += lane_sum(f[kDrho], n);
-    if constexpr (kShift) {
-      for (int d = 0; d < D; ++d) A.gradc[d] += lane_sum(f[kGradc + d], n);
-      A.divr += lane_sum(f[kDivr], n);
+    void add_to(int l, Accum<D, T>& S) const {
+      for (int d = 0; d < D; ++d) S.acc[d] += f[kAcc + d][l];
+      S.drho += f[kDrho][l];
+      if constexpr (kShift) {
+        for (int d = 0; d < D; ++d) S.gradc[d] += f[kGradc + d][l];
+        S.divr += f[kDivr][l];
+      }
+      S.visc_dt = visc[l] > S.visc_dt ? visc[l] : S.visc_dt;
+      ++S.pairs;
     }
-    const T vdt = lane_max(visc, n);
+  };
+  auto flush = [&] {
+    Side a;
+    [[maybe_unused]] Side b;
+    for (int l = 0; l < n; ++l) {
+      const int k = static_cast<int>(nb[l]);
+      T rab[D], vab[D];
+      const T r2 = separation<D, T>(B, k, x, v, rab, vab);
+      const T F = wendland_gradient_factor(r2, P);
+      Accum<D, T> S, Sb;
+      pair_common<D, T>(P, rab, r2, F, vab, rho, ir, p, B.rho[k], B.inv_rho[k], B.p[k], B.mass[k], S, m,
+                        kScatter ? &Sb : nullptr);
+      if constexpr (kShift)
+        pair_shift<D, T>(rab, r2, F, B.mass[k] * B.inv_rho[k], S, m * ir, kScatter ? &Sb : nullptr);
+      a.keep(l, S);
+      if constexpr (kScatter) b.keep(l, Sb);
+    }
+    for (int d = 0; d < D; ++d) A.acc[d] += lane_sum(a.f[kAcc + d], n);
+    A.drho += lane_sum(a.f[kDrho], n);
+    if constexpr (kShift) {
+      for (int d = 0; d < D; ++d) A.gradc[d] += lane_sum(a.f[kGradc + d], n);
+      A.divr += lane_sum(a.f[kDivr], n);
+    }
+    const T vdt = lane_max(a.visc, n);
     A.visc_dt = vdt > A.visc_dt ? vdt : A.visc_dt;
     A.pairs += n;
+    if constexpr (kScatter)
+      for (int l = 0; l < n; ++l) b.add_to(l, b_sums[nb[l]]);
     n = 0;
   };
   ranges([&](uint32_t b0, uint32_t b1) {

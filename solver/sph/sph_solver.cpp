@@ -6,8 +6,9 @@
 // Fluid particles are stored as structure-of-arrays and re-sorted by cell at the start of every step; the
 // wall particles (fixed; their density from the water at their ghost nodes, mDBC, or evolved by continuity,
 // DBC; floored at rho0) are sorted once. The fluid-fluid pairs are summed once for both particles, slabs of
-// cells three apart at once (sph_launch.h); every other loop body writes only its own particle. Race-free
-// without atomics, and the result does not depend on the number of threads.
+// cells three apart at once (sph_launch.h), and so are the walls' pairs with the water; every other loop body
+// writes only its own particle. Race-free without atomics, and the result does not depend on the number of
+// threads.
 #include <omp.h>
 
 #include <algorithm>
@@ -724,9 +725,9 @@ class SphSolver final : public Simulation {
     });
     const T lift = T(hold_lift(t));
     const bool sps = !artificial_;
-    fluid_pairs(water, shift_sums, sps);
     const sph::NeighbourView<D, T> walls = view_of(xw_, vwe_, RW, irw_, pw_, mw_all_);
     const sph::NeighbourView<D, T> boxes = view_of(XB, B.v, RB, B.ir, B.p, B.mass);
+    fluid_pairs(water, walls, shift_sums, sps);
     sph::parallel_for(n_, [&](size_t a) {
       T xa[D], va[D];
       for (int d = 0; d < D; ++d) {
@@ -734,11 +735,11 @@ class SphSolver final : public Simulation {
         va[d] = V[d][a];
       }
       const T rho_a = R[a], ira = irf_[a], p_a = pf_[a];
-      // The sums over the walls and the boxes around the point x moving at v, and with `fluid` over the water
-      // too (at a particle's image, whose pairs fluid_pairs does not hold).
-      auto gather = [&](const sph::Params<T>& Q, const T* x, const T* v, const T* tau, bool fluid,
+      // The sums over the boxes around the point x moving at v, and at a particle's `image` over the water and
+      // the walls too (fluid_pairs holds the particle's own pairs with both).
+      auto gather = [&](const sph::Params<T>& Q, const T* x, const T* v, const T* tau, bool image,
                         Accum<D, T>& A) {
-        if (fluid)
+        if (image)
           for_pairs(fluid_list_, X, V, x, v, [&](uint32_t b, const T* rab, T r2, const T* vab, T F) {
             sph::pair_common<D, T>(Q, rab, r2, F, vab, rho_a, ira, p_a, R[b], irf_[b], pf_[b], mass_[b], A);
             T tau_b[kS];
@@ -754,7 +755,7 @@ class SphSolver final : public Simulation {
           else
             sph::gather_pairs<D, T, false>(Q, nv, x, v, rho_a, ira, p_a, ranges, A);
         };
-        boundary(wall_list_, walls);
+        if (image) boundary(wall_list_, walls);
         if (B.n > 0) boundary(B.list, boxes);
       };
       Accum<D, T> A = pair_sums_[a];
@@ -819,8 +820,7 @@ class SphSolver final : public Simulation {
         for (int d = 0; d < D; ++d) f_out[d][k] = mass_of(k) * A.acc[d];
       });
     };
-    boundary_rates(
-        nw_, xw_, vwe_, RW, irw_, pw_, [&](size_t) { return mw_; }, drhow_, fw_);
+    if (mirror_.active()) wall_images(water, RW);
     boundary_rates(B.n, XB, B.v, RB, B.ir, B.p, [&](size_t k) { return B.mass[k]; }, B.drho, B.f);
     long pairs = 0;
 #pragma omp parallel for reduction(+ : pairs) schedule(static)
@@ -843,12 +843,14 @@ class SphSolver final : public Simulation {
     return view;
   }
 
-  // The fluid-fluid sums of every particle (acceleration, density rate, velocity gradient, viscous step
-  // limit, pair count; the shifting's sums with `shift_sums`) into pair_sums_, each pair evaluated once for
-  // both particles: particle a takes the particles b after it in cell order. Slabs of cells along the grid's
-  // longest axis, slab_w_ wide, hold particles whose neighbours lie in the same slab or the next either side,
-  // so every third slab is summed at once.
-  void fluid_pairs(const sph::NeighbourView<D, T>& water, bool shift_sums, bool sps) {
+  // The sums of every fluid particle over the water and the walls (acceleration, density rate, velocity
+  // gradient, viscous step limit, pair count; the shifting's sums with `shift_sums`) into pair_sums_, and the
+  // walls' density rates and forces from the water into drhow_ and fw_; each pair evaluated once for both
+  // particles: fluid particle a takes the fluid particles b after it in cell order, each wall particle all its
+  // water. Slabs of cells along the grid's longest axis, slab_w_ wide, hold particles whose neighbours lie in
+  // the same slab or the next either side, so every third slab is summed at once.
+  void fluid_pairs(const sph::NeighbourView<D, T>& water, const sph::NeighbourView<D, T>& walls, bool shift_sums,
+                   bool sps) {
     const sph::Params<T> P = P_;
     sph::parallel_for(n_, [&](size_t i) { pair_sums_[i] = Accum<D, T>(); });
     sph::FluidView<D, T> view;
@@ -873,9 +875,25 @@ class SphSolver final : public Simulation {
                                                                                          ranges_after_a, A);
       sph::add_sums(A, pair_sums_[a]);
     };
+    auto wall_pairs = [&](uint32_t k, auto shift_tag) {
+      T xk[D], vk[D];
+      for (int d = 0; d < D; ++d) {
+        xk[d] = walls.x[d][k];
+        vk[d] = walls.v[d][k];
+      }
+      auto ranges = [&](const auto& f) { sph::for_each_neighbour_range<D>(grid_, fluid_list_, xk, search_, f); };
+      Accum<D, T> A;
+      sph::gather_pairs<D, T, decltype(shift_tag)::value, true>(P, water, xk, vk, walls.rho[k], walls.inv_rho[k],
+                                                                walls.p[k], ranges, A, mw_, pair_sums_.data());
+      drhow_[k] = A.drho;
+      for (int d = 0; d < D; ++d) fw_[d][k] = mw_ * A.acc[d];
+    };
     auto pairs_in_slab = [&](int s, auto sps_tag, auto shift_tag) {
       sph::for_each_slab_range<D>(grid_, fluid_list_, slab_axis_, slab_w_, s, [&](uint32_t i0, uint32_t i1) {
         for (uint32_t a = i0; a < i1; ++a) pairs_after(a, sps_tag, shift_tag);
+      });
+      sph::for_each_slab_range<D>(grid_, wall_list_, slab_axis_, slab_w_, s, [&](uint32_t k0, uint32_t k1) {
+        for (uint32_t k = k0; k < k1; ++k) wall_pairs(k, shift_tag);
       });
     };
     using Yes = std::true_type;
@@ -886,6 +904,28 @@ class SphSolver final : public Simulation {
       if (sps && !shift_sums) pairs_in_slab(s, Yes{}, No{});
       if (!sps && shift_sums) pairs_in_slab(s, No{}, Yes{});
       if (!sps && !shift_sums) pairs_in_slab(s, No{}, No{});
+    });
+  }
+
+  // The walls' sums over the water's mirror images (a symmetry plane), gathered at each near wall particle's
+  // own image and added to what fluid_pairs left in drhow_ and fw_.
+  void wall_images(const sph::NeighbourView<D, T>& water, const std::vector<T>& RW) {
+    const sph::Params<T> P = P_;
+    sph::parallel_for(nw_, [&](size_t k) {
+      T xk[D], vk[D], xm[D], vm[D];
+      for (int d = 0; d < D; ++d) {
+        xk[d] = xw_[d][k];
+        vk[d] = vwe_[d][k];
+      }
+      if (!near_mirror(xk)) return;
+      sph::reflect_point<D>(mirror_.axis, T(mirror_.at), xk, xm);
+      sph::reflect_vector<D>(mirror_.axis, vk, vm);
+      auto ranges = [&](const auto& f) { sph::for_each_neighbour_range<D>(grid_, fluid_list_, xm, search_, f); };
+      Accum<D, T> M, R;
+      sph::gather_pairs<D, T, false>(P, water, xm, vm, RW[k], irw_[k], pw_[k], ranges, M);
+      sph::add_reflected(mirror_.axis, M, R);
+      drhow_[k] += R.drho;
+      for (int d = 0; d < D; ++d) fw_[d][k] += mw_ * R.acc[d];
     });
   }
 
