@@ -35,9 +35,25 @@ bool solid_at(const Scene& s, const Vec3d& p, double tol, int& owner) {
     if (p[d] < s.domain_lo[d] || p[d] > s.domain_hi[d]) return true;
   return false;
 }
+
+// A lower bound on the distance from the solid point p to open space: its depth in the deepest solid holding
+// it (the distance to a half-space's plane or a box's nearest face; outside the domain, the largest overshoot
+// along an axis). Open space lies outside every solid, so at least that far.
+double depth_in_solids(const Scene& s, const Vec3d& p, double tol) {
+  double depth = 0;
+  for (const auto& b : s.boundaries) {
+    if (b.condition == BoundaryCondition::kSymmetry) continue;
+    const double d = shape_distance(b.shape, p, s.dimension);
+    if (d <= tol) depth = std::max(depth, -d);
+  }
+  for (int d = 0; d < s.dimension; ++d)
+    depth = std::max({depth, s.domain_lo[d] - p[d], p[d] - s.domain_hi[d]});
+  return depth;
+}
 }  // namespace
 
-WallParticles make_wall_particles(const Scene& scene, double spacing, int layers, double max_points) {
+WallParticles make_wall_particles(const Scene& scene, double spacing, int layers, double reach,
+                                  double max_points) {
   const int D = scene.dimension;
   long k0[3] = {0, 0, 0}, n[3] = {1, 1, 1};
   double total = 1;
@@ -95,6 +111,7 @@ WallParticles make_wall_particles(const Scene& scene, double spacing, int layers
     const Vec3d p = point(i, k);
     int o;
     if (!solid_at(scene, p, tol, o) || beyond_symmetry(scene, p, tol)) continue;
+    if (depth_in_solids(scene, p, tol) >= reach) continue;
     for (int d = 0; d < 3; ++d) w.x[d].push_back(p[d]);
     w.wall.push_back(o);
     for (int d = 0; d < 3; ++d) w.velocity.push_back(o >= 0 ? scene.boundaries[o].velocity[d] : 0.0);

@@ -2,7 +2,9 @@
 // fluid's lattice (spacing s, at (k + 1/2) s from the frame's origin, where water boxes that start on a
 // multiple of s put their particles) that lie in a solid (a boundary box or half-space, or outside the
 // domain) within `layers` lattice steps of open space, enough to fill the kernel's support 2h beside every
-// wall.
+// wall, and less than `reach` (the support, 2h) deep in each solid that holds them. A point that deep is
+// farther than the support from any point outside the solids, so no water outside them ever meets it (in 3D,
+// 2h = 3.46 s: a face on the lattice's half points keeps three of the four layers).
 #pragma once
 #include <vector>
 
@@ -18,6 +20,7 @@ struct WallParticles {
 };
 
 // Throws InputError (naming solver.dx) when the lattice over the domain would exceed max_points.
-WallParticles make_wall_particles(const Scene& scene, double spacing, int layers, double max_points = 4e8);
+WallParticles make_wall_particles(const Scene& scene, double spacing, int layers, double reach,
+                                  double max_points = 4e8);
 
 }  // namespace flume::sph

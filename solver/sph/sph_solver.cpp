@@ -474,7 +474,7 @@ class SphSolver final : public Simulation {
 
   void seed_walls() {
     const int layers = static_cast<int>(std::ceil(2 * h_ / spacing_));
-    sph::WallParticles w = sph::make_wall_particles(scene_, spacing_, layers);
+    sph::WallParticles w = sph::make_wall_particles(scene_, spacing_, layers, 2 * h_);
     double lo[D], hi[D];
     for (int d = 0; d < D; ++d) {
       lo[d] = scene_.domain_lo[d] - (layers + 2) * spacing_;
