@@ -186,7 +186,7 @@ Records load_records() {
   Records r;
   for (int k = 0; k < 4; ++k) {
     r.rec[k] = read_record(test::validation_file(std::string("lobovsky_2014/") + kRecord[k]));
-    // The second series is only in shared/validation; without it the scatter is not printed.
+    // The second acquisition series, for the experiment's own scatter (printed, not asserted).
     if (*kRepeat[k])
       r.rep[k] = read_record(test::validation_file(std::string("lobovsky_2014/") + kRepeat[k]));
   }
