@@ -68,10 +68,11 @@ struct CellList {
 
 // Calls f(begin, end) for the contiguous ranges of `list`'s particles whose cells come within `radius` of the
 // point x: per row of cells along x, only the cells the sphere reaches there (the rows' distance across trims
-// it).
+// it). Rows numbered below `first_row` (row = cell index / n[0]) are skipped: a particle's pairs with the
+// particles after it in cell order start at its own row.
 template <int D, typename T, class F>
 inline void for_each_neighbour_range(const CellGrid<D>& g, const CellList& list, const T* x, double radius,
-                                     const F& f) {
+                                     const F& f, std::size_t first_row = 0) {
   double p[D];
   int lo[D], hi[D];
   for (int d = 0; d < D; ++d) {
@@ -96,11 +97,14 @@ inline void for_each_neighbour_range(const CellGrid<D>& g, const CellList& list,
     if (b < e) f(b, e);
   };
   if constexpr (D == 2) {
-    for (int z = lo[1]; z <= hi[1]; ++z) row(std::size_t(z) * g.n[0], gap2(1, z));
+    for (int z = std::max(lo[1], static_cast<int>(first_row)); z <= hi[1]; ++z)
+      row(std::size_t(z) * g.n[0], gap2(1, z));
   } else {
-    for (int z = lo[2]; z <= hi[2]; ++z) {
+    const int z_first = static_cast<int>(first_row / g.n[1]), y_first = static_cast<int>(first_row % g.n[1]);
+    for (int z = std::max(lo[2], z_first); z <= hi[2]; ++z) {
       const double gz = gap2(2, z);
-      for (int y = lo[1]; y <= hi[1]; ++y) row((std::size_t(z) * g.n[1] + y) * g.n[0], gz + gap2(1, y));
+      for (int y = z == z_first ? std::max(lo[1], y_first) : lo[1]; y <= hi[1]; ++y)
+        row((std::size_t(z) * g.n[1] + y) * g.n[0], gz + gap2(1, y));
     }
   }
 }

@@ -864,11 +864,16 @@ class SphSolver final : public Simulation {
         xa[d] = water.x[d][a];
         va[d] = water.v[d][a];
       }
+      // Rows of cells before a's own hold only particles before it.
+      const std::size_t first_row = fluid_list_.cell[a] / std::size_t(grid_.n[0]);
       auto ranges_after_a = [&](const auto& f) {
-        sph::for_each_neighbour_range<D>(grid_, fluid_list_, xa, search_, [&](uint32_t b0, uint32_t b1) {
-          b0 = std::max(b0, a + 1);
-          if (b0 < b1) f(b0, b1);
-        });
+        sph::for_each_neighbour_range<D>(
+            grid_, fluid_list_, xa, search_,
+            [&](uint32_t b0, uint32_t b1) {
+              b0 = std::max(b0, a + 1);
+              if (b0 < b1) f(b0, b1);
+            },
+            first_row);
       };
       Accum<D, T> A;
       sph::fluid_pairs_after<D, T, decltype(sps_tag)::value, decltype(shift_tag)::value>(P, view, a, xa, va,
