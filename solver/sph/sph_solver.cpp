@@ -789,16 +789,20 @@ class SphSolver final : public Simulation {
       for (int k = 0; k < kS; ++k) tau_[k].swap(tau_next_[k]);
     // Walls and debris particles: density from the fluid around them (continuity only); the pair force on
     // each, which is the opposite of what it exerts on the fluid (the pair terms are antisymmetric), for the
-    // load cells and the boxes' loads.
+    // load cells and the boxes' loads. Without `direct` only the sums over the water's mirror images are added
+    // to what is there (the walls: fluid_pairs holds their direct pairs).
     auto boundary_rates = [&](size_t count, const std::vector<T>* XK, const std::vector<T>* VK,
                               const std::vector<T>& RK, const std::vector<T>& irk, const std::vector<T>& pk,
-                              const auto& mass_of, std::vector<T>& drho_out, std::vector<T>* f_out) {
+                              const std::vector<T>& mass, std::vector<T>& drho_out, std::vector<T>* f_out,
+                              bool direct) {
       sph::parallel_for(count, [&](size_t k) {
         T xk[D], vk[D];
         for (int d = 0; d < D; ++d) {
           xk[d] = XK[d][k];
           vk[d] = VK[d][k];
         }
+        const bool image = near_mirror(xk);
+        if (!direct && !image) return;
         const T rho_k = RK[k], p_k = pk[k];
         auto gather = [&](const T* x, const T* v, Accum<D, T>& A) {
           auto ranges = [&](const auto& f) {
@@ -807,8 +811,8 @@ class SphSolver final : public Simulation {
           sph::gather_pairs<D, T, false>(P, water, x, v, rho_k, irk[k], p_k, ranges, A);
         };
         Accum<D, T> A;
-        gather(xk, vk, A);
-        if (near_mirror(xk)) {
+        if (direct) gather(xk, vk, A);
+        if (image) {
           T xm[D], vm[D];
           sph::reflect_point<D>(mirror_.axis, T(mirror_.at), xk, xm);
           sph::reflect_vector<D>(mirror_.axis, vk, vm);
@@ -816,12 +820,17 @@ class SphSolver final : public Simulation {
           gather(xm, vm, M);
           sph::add_reflected(mirror_.axis, M, A);
         }
-        drho_out[k] = A.drho;
-        for (int d = 0; d < D; ++d) f_out[d][k] = mass_of(k) * A.acc[d];
+        if (direct) {
+          drho_out[k] = A.drho;
+          for (int d = 0; d < D; ++d) f_out[d][k] = mass[k] * A.acc[d];
+        } else {
+          drho_out[k] += A.drho;
+          for (int d = 0; d < D; ++d) f_out[d][k] += mass[k] * A.acc[d];
+        }
       });
     };
-    if (mirror_.active()) wall_images(water, RW);
-    boundary_rates(B.n, XB, B.v, RB, B.ir, B.p, [&](size_t k) { return B.mass[k]; }, B.drho, B.f);
+    if (mirror_.active()) boundary_rates(nw_, xw_, vwe_, RW, irw_, pw_, mw_all_, drhow_, fw_, false);
+    boundary_rates(B.n, XB, B.v, RB, B.ir, B.p, B.mass, B.drho, B.f, true);
     long pairs = 0;
 #pragma omp parallel for reduction(+ : pairs) schedule(static)
     for (long i = 0; i < long(n_); ++i) pairs += pairs_[i];
@@ -909,28 +918,6 @@ class SphSolver final : public Simulation {
       if (sps && !shift_sums) pairs_in_slab(s, Yes{}, No{});
       if (!sps && shift_sums) pairs_in_slab(s, No{}, Yes{});
       if (!sps && !shift_sums) pairs_in_slab(s, No{}, No{});
-    });
-  }
-
-  // The walls' sums over the water's mirror images (a symmetry plane), gathered at each near wall particle's
-  // own image and added to what fluid_pairs left in drhow_ and fw_.
-  void wall_images(const sph::NeighbourView<D, T>& water, const std::vector<T>& RW) {
-    const sph::Params<T> P = P_;
-    sph::parallel_for(nw_, [&](size_t k) {
-      T xk[D], vk[D], xm[D], vm[D];
-      for (int d = 0; d < D; ++d) {
-        xk[d] = xw_[d][k];
-        vk[d] = vwe_[d][k];
-      }
-      if (!near_mirror(xk)) return;
-      sph::reflect_point<D>(mirror_.axis, T(mirror_.at), xk, xm);
-      sph::reflect_vector<D>(mirror_.axis, vk, vm);
-      auto ranges = [&](const auto& f) { sph::for_each_neighbour_range<D>(grid_, fluid_list_, xm, search_, f); };
-      Accum<D, T> M, R;
-      sph::gather_pairs<D, T, false>(P, water, xm, vm, RW[k], irw_[k], pw_[k], ranges, M);
-      sph::add_reflected(mirror_.axis, M, R);
-      drhow_[k] += R.drho;
-      for (int d = 0; d < D; ++d) fw_[d][k] += mw_ * R.acc[d];
     });
   }
 
