@@ -8,6 +8,7 @@
 #include "common/command.h"
 #include "common/errors.h"
 #include "common/version.h"
+#include "solver/cpu_kernels.h"
 
 namespace flume::cli {
 namespace {
@@ -65,8 +66,14 @@ std::string reworded(const CLI::ParseError& e) {
 
 std::unique_ptr<CLI::App> build_app() {
   auto app = std::make_unique<CLI::App>("flume: tsunami-debris flume simulation and uncertainty campaigns", "flume");
+  std::string kernels;  // the CPU loops' instruction set on this machine (solver/cpu_kernels.h)
+  try {
+    kernels = std::string(", ") + cpu_kernels_name(cpu_kernels()) + " CPU kernels";
+  } catch (const InputError& e) {
+    kernels = std::string(", ") + e.what();
+  }
   app->set_version_flag("--version", std::string("flume ") + build_info::version() + " (" +
-                                         build_info::commit() + ", " + build_info::kind() + " build)");
+                                         build_info::commit() + ", " + build_info::kind() + " build" + kernels + ")");
   app->allow_extras();  // unknown options are reported by run() in flume's words; subcommands inherit this
   app->require_subcommand(0, 1);
   for (const Command& c : commands()) {

@@ -11,14 +11,15 @@ measured_on() {  # measured_on FLUME THREADS
     native=$(sed -n 's/^FLUME_NATIVE:BOOL=//p' "$cache")
     type=$(sed -n 's/^CMAKE_BUILD_TYPE:STRING=//p' "$cache")
   fi
-  local version commit
-  version=$("$flume" --version 2>/dev/null | head -1)  # flume 0.1.0 (ab61e6f, portable build)
+  local version commit kernels
+  version=$("$flume" --version 2>/dev/null | head -1)  # flume 0.1.0 (ab61e6f, portable build, avx2 CPU kernels)
   commit=$(sed -n 's/.*(\([^,]*\),.*/\1/p' <<<"$version")
+  kernels=$(sed -n 's/.*, \([a-z0-9]*\) CPU kernels).*/, \1 CPU kernels/p' <<<"$version")  # solver/cpu_kernels.h
   [[ -n $commit ]] || commit="$(git -C "$root" rev-parse --short HEAD) (the working tree's; the binary does not say)"
-  printf 'Measured at commit %s, %s UTC; %s, %s cores (%s GiB), load average %s before the runs; build %s, %s; %s OpenMP thread(s) per run, one run at a time.\n' \
+  printf 'Measured at commit %s, %s UTC; %s, %s cores (%s GiB), load average %s before the runs; build %s, %s%s; %s OpenMP thread(s) per run, one run at a time.\n' \
     "$commit" "$(date -u '+%F %H:%M')" \
     "$(sed -n 's/^model name[[:space:]]*: //p' /proc/cpuinfo | head -1)" "$(nproc --all)" "$(awk '/MemTotal/ {printf "%.0f", $2 / 1048576}' /proc/meminfo)" \
-    "$(cut -d' ' -f1-3 /proc/loadavg)" "$type" "$([[ $native == ON ]] && echo native || echo portable)" "$threads"
+    "$(cut -d' ' -f1-3 /proc/loadavg)" "$type" "$([[ $native == ON ]] && echo native || echo portable)" "$kernels" "$threads"
 }
 
 # Runs SCENE into OUT unless OUT already holds a finished run (a killed script resumes where it stopped), then

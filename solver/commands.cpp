@@ -15,6 +15,7 @@
 #include "common/command.h"
 #include "common/errors.h"
 #include "common/version.h"
+#include "solver/cpu_kernels.h"
 #include "solver/run.h"
 #include "solver/run_output.h"
 #include "solver/scene.h"
@@ -128,6 +129,7 @@ void add_bench_command(CLI::App& app) {
         {"precision", to_string(scene.solver.precision)},
         {"backend", options.backend == Backend::kCuda ? "cuda" : "cpu"},
         {"build", build_info::kind()},
+        {"cpu_kernels", cpu_kernels_name(cpu_kernels())},
         {"threads", options.threads > 0 ? options.threads : omp_get_max_threads()},
         {"dx", scene.solver.dx},
         {"status", st == RunStatus::kUnstable ? "unstable" : "ok"},

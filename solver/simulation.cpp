@@ -2,11 +2,10 @@
 
 #include "common/errors.h"
 #include "solver/checkpoint.h"
+#include "solver/cpu_kernels.h"
 
 namespace flume {
 
-std::unique_ptr<Simulation> make_cpu_simulation(const Scene& scene, const SimulationOptions& options);
-std::unique_ptr<Simulation> make_sph_simulation(const Scene& scene, const SimulationOptions& options);
 #ifdef FLUME_HAVE_CUDA
 std::unique_ptr<Simulation> make_cuda_simulation(const Scene& scene, const SimulationOptions& options);
 bool cuda_device_present();

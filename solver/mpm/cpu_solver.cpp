@@ -8,6 +8,7 @@
 #include <cmath>
 
 #include "common/errors.h"
+#include "solver/cpu_kernels.h"
 #include "solver/mpm/audit.h"
 #include "solver/seeding.h"
 
@@ -182,7 +183,8 @@ FLUME_MPM_SOLVER_VARIANTS(FLUME_INSTANTIATE)
 
 }  // namespace mpm
 
-std::unique_ptr<Simulation> make_cpu_simulation(const Scene& scene, const SimulationOptions& options) {
+// This copy's factory (solver/cpu_kernels.h).
+std::unique_ptr<Simulation> FLUME_KERNELS_ENTRY(make_cpu_simulation)(const Scene& scene, const SimulationOptions& options) {
   const bool f = scene.solver.precision == Precision::kFloat;
   if (scene.solver.flip > 0) {  // FLIP's old velocity in the scatter: a solver of its own (kFlipChannels)
     if (scene.dimension == 2) {

@@ -19,6 +19,7 @@
 
 #include "common/errors.h"
 #include "solver/checkpoint.h"
+#include "solver/cpu_kernels.h"
 #include "solver/debris_coupling.h"
 #include "solver/inflow.h"
 #include "solver/instruments.h"
@@ -1154,7 +1155,8 @@ class SphSolver final : public Simulation {
 
 }  // namespace
 
-std::unique_ptr<Simulation> make_sph_simulation(const Scene& scene, const SimulationOptions& options) {
+// This copy's factory (solver/cpu_kernels.h).
+std::unique_ptr<Simulation> FLUME_KERNELS_ENTRY(make_sph_simulation)(const Scene& scene, const SimulationOptions& options) {
   const bool f = scene.solver.precision == Precision::kFloat;
   if (scene.dimension == 2) {
     if (f) return std::make_unique<SphSolver<2, float>>(scene, options);

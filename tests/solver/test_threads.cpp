@@ -18,43 +18,20 @@
 namespace flume {
 namespace {
 
-struct State {
-  std::vector<double> xyz, vel, p;
-  Record record;
-  long steps = 0;
-};
-
-State run(const Scene& scene, int threads) {
+test::FinalState run(const Scene& scene, int threads) {
   SimulationOptions o;
   o.threads = threads;
   auto sim = make_simulation(scene, o);
   EXPECT_EQ(omp_get_max_threads(), threads);
   EXPECT_EQ(test::run_until(*sim, scene.solver.end_time), RunStatus::kOk) << sim->message();
-  State s;
-  sim->particle_positions(s.xyz);
-  sim->particle_velocities(s.vel);
-  sim->particle_pressures(s.p);
-  s.record = sim->record();
-  s.steps = sim->steps();
-  return s;
-}
-
-// max |a - b| / max |a| over two series of equal length.
-double rel_diff(const std::vector<double>& a, const std::vector<double>& b) {
-  EXPECT_EQ(a.size(), b.size());
-  double d = 0, s = 0;
-  for (size_t i = 0; i < std::min(a.size(), b.size()); ++i) {
-    d = std::max(d, std::fabs(a[i] - b[i]));
-    s = std::max(s, std::fabs(a[i]));
-  }
-  return s > 0 ? d / s : d;
+  return test::final_state(*sim);
 }
 
 void compare(const Scene& scene) {
-  const State one = run(scene, 1);
+  const test::FinalState one = run(scene, 1);
   for (int threads : {2, 3}) {
     SCOPED_TRACE(std::to_string(threads) + " threads");
-    const State many = run(scene, threads);
+    const test::FinalState many = run(scene, threads);
     EXPECT_EQ(many.steps, one.steps);
     // Bitwise.
     EXPECT_TRUE(many.xyz == one.xyz) << "positions differ";
@@ -79,7 +56,7 @@ void compare(const Scene& scene) {
     EXPECT_TRUE(many.record.diagnostics.at("max_speed") == one.record.diagnostics.at("max_speed"));
     // Round-off of double reductions: a few ulps of the largest value.
     for (const char* k : {"kinetic", "potential", "elastic", "total"}) {
-      const double r = rel_diff(one.record.diagnostics.at(k), many.record.diagnostics.at(k));
+      const double r = test::rel_diff(one.record.diagnostics.at(k), many.record.diagnostics.at(k));
       EXPECT_LT(r, 1e-12) << k;
     }
     for (const auto& [name, ts] : one.record.loads) {
@@ -87,7 +64,7 @@ void compare(const Scene& scene) {
       for (double f : ts.values) peak = std::max(peak, std::fabs(f));
       EXPECT_GT(peak, 1.0) << name
                            << ": the water must load the boundary for the comparison to mean anything";
-      const double r = rel_diff(ts.values, many.record.loads.at(name).values);
+      const double r = test::rel_diff(ts.values, many.record.loads.at(name).values);
       std::printf("[ info ] %d threads: load '%s' (peak %.3g N) differs by %.2e relative\n", threads,
                   name.c_str(), peak, r);
       EXPECT_LT(r, 1e-12) << name;

@@ -1,5 +1,6 @@
 // Helpers shared by the solver tests.
 #pragma once
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <cstdio>
@@ -73,6 +74,33 @@ inline RunStatus run_until(Simulation& sim, double t_end) {
   RunStatus s = RunStatus::kRunning;
   while (s == RunStatus::kRunning && sim.time() < t_end - 1e-12) s = sim.step();
   return s;
+}
+
+// What a finished run leaves: the particles' positions, velocities and pressures, the instruments' record and
+// the number of steps (for comparing two runs of one scene, e.g. on different thread counts or kernel copies).
+struct FinalState {
+  std::vector<double> xyz, vel, p;
+  Record record;
+  long steps = 0;
+};
+inline FinalState final_state(const Simulation& sim) {
+  FinalState s;
+  sim.particle_positions(s.xyz);
+  sim.particle_velocities(s.vel);
+  sim.particle_pressures(s.p);
+  s.record = sim.record();
+  s.steps = sim.steps();
+  return s;
+}
+
+// max |a - b| / max |a| over two series (of equal length; the shorter one's length otherwise).
+inline double rel_diff(const std::vector<double>& a, const std::vector<double>& b) {
+  double d = 0, s = 0;
+  for (size_t i = 0; i < std::min(a.size(), b.size()); ++i) {
+    d = std::max(d, std::fabs(a[i] - b[i]));
+    s = std::max(s, std::fabs(a[i]));
+  }
+  return s > 0 ? d / s : d;
 }
 
 // The CUDA backend on the device; the tests that use it skip where there is none (SKIP_WITHOUT_DEVICE).
