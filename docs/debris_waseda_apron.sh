@@ -7,6 +7,8 @@
 #   5x2     scenes/waseda/waseda_apron.json, 5x2 columns, dx = DX (0.02 m), END_TIME (12 s) simulated
 #   0x0     the same without obstacles at DX0 (0.03 m: the eq. 58 comparison)
 #   paths   flume debris-paths over both runs -> $OUT/debris_paths.svg and the metric tables
+# docs/debris/apron_tables.sh OUT then prints the tables docs/debris.md quotes, headed by OUT/header.txt (the commit
+# and machine of the first start) with each run's cost (OUT/NAME.time).
 # Usage: docs/debris_waseda_apron.sh [feed 5x2 0x0 paths]   (default: all four)
 # Environment: FLUME (build/bin/flume), OUT (debris-apron), THREADS (2), DX, DX0, END_TIME, GATE (0.10 m), FILL, FEED_DX,
 # FEED_END (END_TIME; the apron cannot run past the feed's record, whose last reading it would hold; a finished
@@ -30,16 +32,23 @@ STEPS=("$@")
 [ ${#STEPS[@]} -eq 0 ] && STEPS=(feed 5x2 0x0 paths)
 mkdir -p "$OUT"
 cd "$OUT"
+source "$ROOT/docs/measured_on.sh"
+[[ -f header.txt ]] || measured_on "$FLUME" "$THREADS" >header.txt  # the first start's; docs/debris/apron_tables.sh prints it
+timed() {  # timed NAME COMMAND...: appends the command's cost to NAME.time (a resumed run adds a line)
+  local name=$1
+  shift
+  OMP_WAIT_POLICY=PASSIVE /usr/bin/time -a -o "$name.time" -f '%e s wall, %U s user, %S s system' "$@"
+}
 want() { for s in "${STEPS[@]}"; do [ "$s" = "$1" ] && return 0; done; return 1; }
 debris=(--set debris.count=6 --set debris.layers=2 --set debris.placement=upstream)
 if want feed && ! grep -qs '"status": "ok"' feed2d/run.json; then  # a finished feed is kept
-  "$FLUME" run "$ROOT/scenes/waseda/waseda_2d.json" --out feed2d --set solver.dx="$FEED_DX" --set solver.end_time="$FEED_END" \
+  timed feed2d "$FLUME" run "$ROOT/scenes/waseda/waseda_2d.json" --out feed2d --set solver.dx="$FEED_DX" --set solver.end_time="$FEED_END" \
     --set reservoir.gate_height_m="$GATE" --set reservoir.fill_level_m="$FILL" --threads "$THREADS"
 fi
 apron() {  # apron NAME LAYOUT DX
   local resume=()
   [ -f "$1/checkpoint.bin" ] && resume=(--resume)
-  "$FLUME" run "$ROOT/scenes/waseda/waseda_apron.json" --out "$1" --set solver.dx="$3" --set solver.end_time="$END_TIME" \
+  timed "$1" "$FLUME" run "$ROOT/scenes/waseda/waseda_apron.json" --out "$1" --set solver.dx="$3" --set solver.end_time="$END_TIME" \
     --set inflow.record="$PWD/feed2d/result.h5" "${debris[@]}" --set obstacles.layout="$2" --threads "$THREADS" \
     --checkpoint-every 600 "${resume[@]}"
 }
