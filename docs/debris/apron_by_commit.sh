@@ -51,7 +51,8 @@ for commit in "$@"; do
   tree=$work/tree_$commit
   [[ -d $tree ]] || git -C "$root" worktree add --detach "$tree" "$commit" >/dev/null
   if [[ ! -x $tree/build/bin/flume ]]; then
-    cmake -S "$tree" -B "$tree/build" -DFLUME_CUDA=OFF -DFLUME_TESTS=OFF -DCMAKE_BUILD_TYPE=Release >"$work/cmake_$commit.log"
+    cmake -S "$tree" -B "$tree/build" -DFLUME_CUDA=OFF -DFLUME_TESTS=OFF -DCMAKE_BUILD_TYPE=Release \
+      >"$work/cmake_$commit.log"
     cmake --build "$tree/build" --target flume -j2 >"$work/build_$commit.log"
   fi
   out=$work/run_${commit}_dx$dx0
@@ -60,6 +61,7 @@ for commit in "$@"; do
   # The commit's own script and scene: the scene's fields change with the solver.
   FLUME=$tree/build/bin/flume OUT=$out FILL=$fill END_TIME=$end_time DX0=$dx0 THREADS=1 \
     "$tree/docs/debris_waseda_apron.sh" 0x0 >"$out/apron.log" 2>&1
-  summary "$out/apron_0x0" "$commit, dx $dx0 m ($(git -C "$root" log -1 --format='%ad, %s' --date=short "$commit" | cut -c1-100))"
+  subject=$(git -C "$root" log -1 --format='%ad, %s' --date=short "$commit" | cut -c1-100)
+  summary "$out/apron_0x0" "$commit, dx $dx0 m ($subject)"
 done
 summary "$feed" "the 2D feed (FEED), its gauges over the same apron"
