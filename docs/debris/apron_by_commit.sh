@@ -10,6 +10,8 @@
 # worktrees and runs go (default /tmp/apron-by-commit); DX0 (0.03 m), END_TIME (3.2 s), FILL (0.67, the feed's).
 # Cost on the 2-core VM: per commit a build of `flume` (4-8 min) and about 200 s of one thread at dx 0.03 m
 # (730 s at 0.02 m). Needs /usr/bin/python3 with h5py and numpy.
+# The worktrees stay registered in this checkout, so that a second call reuses their builds: `git worktree
+# remove WORK/tree_COMMIT` (or delete WORK, then `git worktree prune`) when done.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/../.." && pwd)
 feed=$(realpath "${FEED:?FEED=DIR: the feed2d folder to replay}")
