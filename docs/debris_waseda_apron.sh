@@ -11,6 +11,7 @@
 # and machine of the first start) with each run's cost (OUT/NAME.time).
 # Usage: docs/debris_waseda_apron.sh [feed 5x2 0x0 paths]   (default: all four)
 # Environment: FLUME (build/bin/flume), OUT (debris-apron), THREADS (2), DX, DX0, END_TIME, GATE (0.10 m), FILL, FEED_DX,
+# BED_ROUGHNESS (0 m: the apron's k_s, basin.bed_roughness_m; the feed keeps its own scene's),
 # FEED_END (END_TIME; the apron cannot run past the feed's record, whose last reading it would hold; a finished
 # feed is kept whatever its length: remove OUT/feed2d to change it).
 # The apron runs checkpoint every 10 min (docs/checkpoints.md): run the script again after a kill and each goes
@@ -28,6 +29,7 @@ GATE=${GATE:-0.10}
 FILL=${FILL:-0.90}
 FEED_DX=${FEED_DX:-0.01}
 FEED_END=${FEED_END:-$END_TIME}
+BED_ROUGHNESS=${BED_ROUGHNESS:-0}
 STEPS=("$@")
 [ ${#STEPS[@]} -eq 0 ] && STEPS=(feed 5x2 0x0 paths)
 mkdir -p "$OUT"
@@ -49,7 +51,8 @@ apron() {  # apron NAME LAYOUT DX
   local resume=()
   [ -f "$1/checkpoint.bin" ] && resume=(--resume)
   timed "$1" "$FLUME" run "$ROOT/scenes/waseda/waseda_apron.json" --out "$1" --set solver.dx="$3" --set solver.end_time="$END_TIME" \
-    --set inflow.record="$PWD/feed2d/result.h5" "${debris[@]}" --set obstacles.layout="$2" --threads "$THREADS" \
+    --set inflow.record="$PWD/feed2d/result.h5" "${debris[@]}" --set obstacles.layout="$2" \
+    --set basin.bed_roughness_m="$BED_ROUGHNESS" --threads "$THREADS" \
     --checkpoint-every 600 "${resume[@]}"
 }
 want 5x2 && apron apron_5x2 5x2 "$DX"

@@ -378,9 +378,6 @@ constexpr double kTieCells = 1e-6;
 // velocity. Left to its one-sided stencil, a node a quarter cell inside drifted as the deeper ghosts did
 // before them (docs/solver.md, "Walls between grid lines").
 constexpr double kGhostDepth = 0.25 - kTieCells;
-// In cells: the bed's own row of nodes (mpm::on_bed), those inside a floor by less than half a cell: the row
-// the bed stress acts on, whichever node is nearer the bed.
-constexpr double kBedRowDepth = 0.5 - kTieCells;
 // In cells: how far the quadratic B-spline stencil reaches; a particle further than this from a node gives it
 // nothing, so water beyond a face cannot reach a node deeper than this inside the solid.
 constexpr double kStencilReach = 1.5;

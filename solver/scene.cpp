@@ -152,8 +152,10 @@ Basin read_basin(const json& root, const std::string& file, int dim) {
   B.length_m = b.number("length_m", Bounds{B.quay_x_m, 1000.0, true, false});
   B.width_m = b.number("width_m");
   B.slice_y_m = b.number_or("slice_y_m", B.width_m / 2, Bounds{0.0, B.width_m});
-  b.choice("walls");
+  const std::string walls = b.choice("walls");
   b.number("wall_friction");
+  if (b.number("bed_roughness_m") > 0 && walls == "sticky")
+    b.fail("bed_roughness_m", "sticky walls already hold the water (must be 0 with walls: sticky)");
   b.choice("instruments");
   B.region = b.choice("region");
   b.finish();
@@ -228,6 +230,7 @@ void expand_basin(json& root, Basin& B, const std::string& file, int dim) {
     dx = root["solver"]["dx"].get<double>();
   const std::string walls = bs.value("walls", std::string("slip"));
   const double wall_friction = bs.value("wall_friction", 0.0);
+  const double bed_roughness = bs.value("bed_roughness_m", 0.0);
   const bool half = B.span == "half";
   const double W = half ? B.width_m / 2 : B.width_m;  // modelled width
   const double pad = 3 * dx;
@@ -269,7 +272,9 @@ void expand_basin(json& root, Basin& B, const std::string& file, int dim) {
   root["domain"] = {{"lo", at(x_lo, y_lo, -pad)}, {"hi", at(L + pad, W + pad, top + pad)}, {"walls", "slip"}};
   json bnd = json::array();
   if (!apron) bnd.push_back(plane("back_wall", at(0, 0, 0), at(1, 0, 0)));
-  bnd.push_back(plane("floor", at(0, 0, 0), at(0, 0, 1)));
+  json floor = plane("floor", at(0, 0, 0), at(0, 0, 1));
+  floor["roughness_m"] = bed_roughness;
+  bnd.push_back(floor);
   bnd.push_back(plane("end_wall", at(L, 0, 0), at(-1, 0, 0)));
   if (dim == 3) {
     bnd.push_back(plane("side_wall", at(0, 0, 0), at(0, 1, 0)));
@@ -288,7 +293,9 @@ void expand_basin(json& root, Basin& B, const std::string& file, int dim) {
     gate["subcell_axes"] = json::array({dim - 1});
     bnd.push_back(gate);
   }
-  bnd.push_back(box("quay", B.quay_x_m, L + 2 * pad, -pad, W + pad, -2 * pad, B.apron_height_m));
+  json quay = box("quay", B.quay_x_m, L + 2 * pad, -pad, W + pad, -2 * pad, B.apron_height_m);
+  quay["roughness_m"] = bed_roughness;
+  bnd.push_back(quay);
   // Obstacles: 0.10 m square columns, 5 across centred on the basin, rows 0.45 m apart.
   const int rows = B.obstacles_layout == "5x2" ? 2 : B.obstacles_layout == "5x1" ? 1 : 0;
   const double size = os.value("size_m", 0.10), spacing = os.value("spacing_m", 0.325);
@@ -537,8 +544,6 @@ Scene parse(const json& root_json, const std::string& file) {
         r.fail("roughness_m", "a symmetry plane has no roughness (must be 0)");
       if (b.roughness > 0 && b.condition == BoundaryCondition::kSticky)
         r.fail("roughness_m", "a sticky wall already holds the water (must be 0)");
-      if (b.roughness > 0 && b.shape.type != ShapeType::kHalfSpace)
-        r.fail("roughness_m", "is a bed's: only a half_space takes it (must be 0 on a box)");
       b.velocity = r.vec("velocity", dim, Vec3d{});
       // Axes across which a box's faces act below a cell (mpm::subcell_cover), e.g. the gate's opening: [0..dim).
       if (r.has("subcell_axes")) {

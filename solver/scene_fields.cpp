@@ -154,8 +154,8 @@ const ObjectDoc& boundary_doc() {
            .def("separate"),
        number("friction", "Coulomb friction coefficient of a separate boundary").in(0, 10).def(0.0),
        number("roughness_m",
-              "equivalent sand roughness k_s of a bed stress by the wall law (a rough channel bed; MPM only; "
-              "Manning's n = k_s^(1/6) / 21.1); 0: none")
+              "equivalent sand roughness k_s of a bed stress by the wall law on the boundary's faces (a rough "
+              "channel bed; MPM only; Manning's n = k_s^(1/6) / 21.1); 0: none")
            .in_unit("m")
            .in(0, 0.1)
            .def(0.0),
@@ -403,6 +403,12 @@ const ObjectDoc& basin_doc() {
            .eg(2.0),
        choice("walls", {"sticky", "slip", "separate"}, "condition of the generated walls").def("slip"),
        number("wall_friction", "Coulomb friction coefficient of the generated walls").in(0, 10).def(0.0),
+       number("bed_roughness_m",
+              "equivalent sand roughness k_s of the generated floor and quay (their roughness_m: the wall law's "
+              "bed stress on every face of them); 0: smooth")
+           .in_unit("m")
+           .in(0, 0.1)
+           .def(0.0),
        choice("instruments", {"waseda", "none"},
               "add gauges WG1-WG4, the ADV probe, load cells and the apron section")
            .def("waseda"),

@@ -38,7 +38,7 @@ struct Wall {
   Bc bc = Bc::kSeparate;
   T mu = 0;
   unsigned subcell_axes = 0;  // mpm::subcell_cover
-  T bed_k = 0;                // a half-space's bed stress: rho C_f dx^(D-1) (mpm::bed_stress); 0: none
+  T bed_k = 0;                // a rough wall's bed stress: rho C_f dx^(D-1) (mpm::bed_stress); 0: none
 };
 
 // The domain box: a container whose faces hold the nodes on or beyond them.
@@ -61,14 +61,44 @@ struct GhostSearch {
   FLUME_HD bool found() const { return axes && !ambiguous; }
 };
 
-// Whether the node at xn is the bed's own row of a half-space (point p, normal n): inside it by less than
-// half a cell (kBedRowDepth). Deeper rows are ghost nodes only (mpm::ghost_half_space), whose velocity the
-// mirror's exchange sets; a row a quarter to half a cell in is both, the stress first.
-template <int D>
-FLUME_HD bool on_bed(const double* xn, const double* p, const double* n, double dx) {
-  double depth = 0;
-  for (int d = 0; d < D; ++d) depth += (p[d] - xn[d]) * n[d];
-  return depth > -kTieCells * dx && depth < kBedRowDepth * dx;
+// Whether a node `depth` inside a face (m; negative: outside, in the water) is in the face's bed row, the one
+// the bed stress acts on: the first row of nodes that are not ghost nodes, from kGhostDepth - 1 to kGhostDepth
+// cells in. That is one node on every grid line across the face wherever the face lies between grid lines (the
+// quay's top at 0.255 m lies half a cell off a 0.02 m grid). It is the node on the face when the face is on a
+// grid line; deeper nodes are ghosts, whose velocity the mirror's exchange sets (mpm::ghost_half_space).
+FLUME_HD bool in_bed_row(double depth, double dx) {
+  return depth >= (kGhostDepth - 1) * dx && depth < kGhostDepth * dx;
+}
+
+// The bed stress of a rough wall (bed_k > 0) on the node at xn: a half-space's when xn is in its bed row; a box's
+// through each face whose bed row holds xn and whose extent along the other axes covers it (the apron's top,
+// the quay's face). Returns whether it acted.
+template <int D, typename T>
+FLUME_HD bool apply_bed_stress(const Wall<D, T>& w, const double* xn, T m, T* v, T dt, double dx) {
+  T nb[D];
+  if (!w.box) {
+    double depth = 0;
+    for (int d = 0; d < D; ++d) depth += (w.a[d] - xn[d]) * w.b[d];
+    if (!in_bed_row(depth, dx)) return false;
+    for (int d = 0; d < D; ++d) nb[d] = T(w.b[d]);
+    bed_stress<D>(v, nb, w.vb, w.bed_k, m, dt);
+    return true;
+  }
+  const double tol = kTieCells * dx;
+  bool acted = false;
+  for (int ax = 0; ax < D; ++ax) {
+    bool over = true;
+    for (int d = 0; d < D; ++d)
+      if (d != ax) over = over && xn[d] >= w.a[d] - tol && xn[d] <= w.b[d] + tol;
+    if (!over) continue;
+    for (int side = 0; side < 2; ++side) {
+      if (!in_bed_row(side == 0 ? xn[ax] - w.a[ax] : w.b[ax] - xn[ax], dx)) continue;
+      for (int d = 0; d < D; ++d) nb[d] = d == ax ? T(side == 0 ? -1 : 1) : T(0);
+      bed_stress<D>(v, nb, w.vb, w.bed_k, m, dt);
+      acted = true;
+    }
+  }
+  return acted;
 }
 
 // The boundaries acting on the node at xn (double, m) with mass m and velocity v (after gravity): each scene
@@ -91,40 +121,35 @@ FLUME_HD unsigned apply_boundaries(const double* xn, T m, T* v, T dt, double loa
     if (w.bc == Bc::kSymmetry) continue;  // not a wall: the grid is folded across it (mpm::SymmetryPlane)
     double n[2 * D][D];
     const int faces = wall_faces<D>(xn, w.box != 0, w.a, w.b, dx, n);
-    if (!faces) {
-      if (w.subcell_axes) {  // a node partly covered by a face between grid lines
-        double nearest[D];
-        const double cover = subcell_cover<D>(xn, w.a, w.b, dx, w.subcell_axes, nearest);
-        if (cover > 0) {
-          T before[D], held[D];
-          for (int d = 0; d < D; ++d) before[d] = held[d] = v[d];
-          const int nf = wall_faces<D>(nearest, w.box != 0, w.a, w.b, dx, n);
-          apply_box_wall<D>(held, nearest, w.a, w.b, dx, n, nf, w.vb, w.bc, w.mu, subcell_rate0, dt);
-          subcell_drag<D>(v, held, cover, subcell_rate0, dt);
-          if (impulse)
-            for (int d = 0; d < D; ++d)
-              accumulate(&impulse[k * D + d], load_weight * double(m) * (before[d] - v[d]));
-        }
-      }
-      continue;
-    }
-    for (int f = 0; f < faces; ++f)
-      for (int d = 0; d < D; ++d)
-        if (n[f][d] != 0.0) held |= 1u << d;
     T before[D];
     for (int d = 0; d < D; ++d) before[d] = v[d];
-    if (w.box)
-      apply_box_wall<D>(v, xn, w.a, w.b, dx, n, faces, w.vb, w.bc, w.mu, subcell_rate0, dt);
-    else
-      apply_wall<D>(v, n, faces, w.vb, w.bc, w.mu);
-    if (w.bed_k > T(0) && !w.box && on_bed<D>(xn, w.a, w.b, dx)) {
-      T nb[D];
-      for (int d = 0; d < D; ++d) nb[d] = T(w.b[d]);
-      bed_stress<D>(v, nb, w.vb, w.bed_k, m, dt);
+    bool acted = faces > 0;
+    if (faces) {
+      for (int f = 0; f < faces; ++f)
+        for (int d = 0; d < D; ++d)
+          if (n[f][d] != 0.0) held |= 1u << d;
+      if (w.box)
+        apply_box_wall<D>(v, xn, w.a, w.b, dx, n, faces, w.vb, w.bc, w.mu, subcell_rate0, dt);
+      else
+        apply_wall<D>(v, n, faces, w.vb, w.bc, w.mu);
+    } else if (w.subcell_axes) {  // a node partly covered by a face between grid lines
+      double nearest[D];
+      const double cover = subcell_cover<D>(xn, w.a, w.b, dx, w.subcell_axes, nearest);
+      if (cover > 0) {
+        T covered[D];
+        for (int d = 0; d < D; ++d) covered[d] = v[d];
+        const int nf = wall_faces<D>(nearest, w.box != 0, w.a, w.b, dx, n);
+        apply_box_wall<D>(covered, nearest, w.a, w.b, dx, n, nf, w.vb, w.bc, w.mu, subcell_rate0, dt);
+        subcell_drag<D>(v, covered, cover, subcell_rate0, dt);
+        acted = true;
+      }
     }
-    if (impulse)
+    // The bed row may lie in the water, outside the wall (a face between grid lines).
+    if (w.bed_k > T(0) && apply_bed_stress<D>(w, xn, m, v, dt, dx)) acted = true;
+    if (impulse && acted)
       for (int d = 0; d < D; ++d)
         accumulate(&impulse[k * D + d], load_weight * double(m) * (before[d] - v[d]));
+    if (!faces) continue;
     if (w.bc == Bc::kSticky) {
       ghost.ambiguous = true;
     } else {
