@@ -62,17 +62,18 @@ struct GhostSearch {
 };
 
 // Whether a node `depth` inside a face (m; negative: outside, in the water) is in the face's bed row, the one
-// the bed stress acts on: the first row of nodes that are not ghost nodes, from kGhostDepth - 1 to kGhostDepth
-// cells in. That is one node on every grid line across the face wherever the face lies between grid lines (the
-// quay's top at 0.255 m lies half a cell off a 0.02 m grid). It is the node on the face when the face is on a
-// grid line; deeper nodes are ghosts, whose velocity the mirror's exchange sets (mpm::ghost_half_space).
+// the bed stress acts on: the first row of nodes that are not ghost nodes, from kGhostDepth - 1 to
+// kGhostDepth cells in. That is one node on every grid line across the face wherever the face lies between
+// grid lines (the quay's top at 0.255 m lies half a cell off a 0.02 m grid). It is the node on the face when
+// the face is on a grid line; deeper nodes are ghosts, whose velocity the mirror's exchange sets
+// (mpm::ghost_half_space).
 FLUME_HD bool in_bed_row(double depth, double dx) {
   return depth >= (kGhostDepth - 1) * dx && depth < kGhostDepth * dx;
 }
 
-// The bed stress of a rough wall (bed_k > 0) on the node at xn: a half-space's when xn is in its bed row; a box's
-// through each face whose bed row holds xn and whose extent along the other axes covers it (the apron's top,
-// the quay's face). Returns whether it acted.
+// The bed stress of a rough wall (bed_k > 0) on the node at xn: a half-space's when xn is in its bed row; a
+// box's through each face whose bed row holds xn and whose extent along the other axes covers it (the apron's
+// top, the quay's face). Returns whether it acted.
 template <int D, typename T>
 FLUME_HD bool apply_bed_stress(const Wall<D, T>& w, const double* xn, T m, T* v, T dt, double dx) {
   T nb[D];

@@ -378,10 +378,16 @@ class SphSolver final : public Simulation {
   }
 
   void seed_fluid() {
-    for (size_t k = 0; k < scene_.boundaries.size(); ++k)
-      if (scene_.boundaries[k].roughness > 0)
-        throw InputError(scene_.file, "boundaries." + std::to_string(k) + ".roughness_m",
-                         "SPH has no bed stress: set it to 0 or run with solver.method mpm");
+    for (size_t k = 0; k < scene_.boundaries.size(); ++k) {
+      const Boundary& b = scene_.boundaries[k];
+      if (!(b.roughness > 0)) continue;
+      // A basin's generated floor and quay take their roughness from basin.bed_roughness_m.
+      const bool generated = scene_.basin.present && (b.name == "floor" || b.name == "quay");
+      throw InputError(
+          scene_.file,
+          generated ? "basin.bed_roughness_m" : "boundaries." + std::to_string(k) + ".roughness_m",
+          "SPH has no bed stress (boundary '" + b.name + "'): set it to 0 or run with solver.method mpm");
+    }
     const Seeds seeds = seed_water<D>(scene_, spacing_, displaced_by<D>(debris_.get()), Lattice::kStretched);
     n_ = seeds.size();
     if (n_ == 0) throw InputError(scene_.file, "water", "no water to simulate");

@@ -36,8 +36,10 @@ Scene sliding_floor(double roughness, double level = 0, bool box = false) {
     "domain": {"lo": [-0.1, -0.1], "hi": [1.1, 0.3], "walls": "slip"},
     "solver": {"dx": 0.02, "ppc": 4, "precision": "double", "end_time": 0.02},
     "fluid": {"density": 1000, "bulk_modulus": 2.0e6},
-    "water": [{"lo": [0.2, )" + lv + R"(], "hi": [0.8, )" + std::to_string(level + 0.1) + R"(]}],
-    "boundaries": [)" + floor + R"(, "condition": "slip", "velocity": [1.0, 0], "roughness_m": )" + ks + "}]}",
+    "water": [{"lo": [0.2, )" +
+                              lv + R"(], "hi": [0.8, )" + std::to_string(level + 0.1) + R"(]}],
+    "boundaries": [)" + floor +
+                              R"(, "condition": "slip", "velocity": [1.0, 0], "roughness_m": )" + ks + "}]}",
                           "sliding_floor.json");
 }
 
@@ -62,21 +64,24 @@ void expect_wall_law_drag(const Factory& make, double level = 0, bool box = fals
   const double bed = kSlab + 3 * kDx;
   const double slowing = 2 * cf * kBedSpeed * kTime / (kDx / 2);  // 2 u / u_b at most
   const double wetted = streamwise_momentum_after(make, kRoughness, level, box) / per_length;
-  const std::string where = std::string(box ? "box" : "half-space") + " floor at " + std::to_string(level) + " m";
+  const std::string where =
+      std::string(box ? "box" : "half-space") + " floor at " + std::to_string(level) + " m";
   // Between grid lines the ghost row under the bed row takes the bed layer's velocity (mpm::ghost_exchange),
-  // which adds momentum of the order the bed layer's own speed takes off the stress; on a grid line the ghosts
-  // lie a cell down, reflecting the layer above.
+  // which adds momentum of the order the bed layer's own speed takes off the stress; on a grid line the
+  // ghosts lie a cell down, reflecting the layer above.
   const bool on_grid = std::fabs(level / kDx - std::round(level / kDx)) < 1e-9;
-  EXPECT_LE(wetted, bed * (1 + (on_grid ? 1e-9 : slowing))) << where << ": momentum " << wetted * per_length << " kg m/s per m";
+  EXPECT_LE(wetted, bed * (1 + (on_grid ? 1e-9 : slowing)))
+      << where << ": momentum " << wetted * per_length << " kg m/s per m";
   EXPECT_GE(wetted, bed * (1 - slowing)) << where << ": momentum " << wetted * per_length << " kg m/s per m";
   const double smooth = streamwise_momentum_after(make, 0.0, level, box);
-  EXPECT_LT(std::fabs(smooth), 1e-3 * kSlab * per_length) << where << ": a smooth sliding floor dragged the water";
+  EXPECT_LT(std::fabs(smooth), 1e-3 * kSlab * per_length)
+      << where << ": a smooth sliding floor dragged the water";
 }
 
 void expect_wall_law_drag_on_grid(const Factory& make) {
   // The coefficient itself: kappa / ln(z / z0) with z = 0.01 m, z0 = 1/30 mm.
-  EXPECT_NEAR(mpm::bed_drag_coefficient(kRoughness, kDx), std::pow(0.41 / std::log(0.01 / (kRoughness / 30)), 2),
-              1e-15);
+  EXPECT_NEAR(mpm::bed_drag_coefficient(kRoughness, kDx),
+              std::pow(0.41 / std::log(0.01 / (kRoughness / 30)), 2), 1e-15);
   expect_wall_law_drag(make);
 }
 
@@ -86,15 +91,15 @@ TEST(BedStress, SlidingRoughFloorDragsTheWaterAtTheWallLawRate) {
 
 // A bed between grid lines (the quay's top at 0.255 m on a 0.02 or 0.03 m grid) drags as one on a grid line:
 // its bed row is the first row of nodes that are no ghosts, in the water above the face where the face lies a
-// quarter cell or more above a row. Before, the row was the nodes less than half a cell inside, so a face half a
-// cell or more above a row had none and dragged nothing.
+// quarter cell or more above a row. Before, the row was the nodes less than half a cell inside, so a face
+// half a cell or more above a row had none and dragged nothing.
 TEST(BedStress, AFloorBetweenGridLinesDragsAtTheSameRate) {
   for (double level : {0.005, 0.01, 0.015})
     expect_wall_law_drag([](const Scene& s) { return make_simulation(s, {}); }, level);
 }
 
-// A box's faces take the wall law as a half-space does (the generated quay and apron are boxes): its top slows
-// the water as a half-space at the same level, on a grid line and between grid lines.
+// A box's faces take the wall law as a half-space does (the generated quay and apron are boxes): its top
+// slows the water as a half-space at the same level, on a grid line and between grid lines.
 TEST(BedStress, ABoxFloorDragsAsAHalfSpaceFloor) {
   const Factory cpu = [](const Scene& s) { return make_simulation(s, {}); };
   for (double level : {0.0, 0.01, 0.015}) {
@@ -146,8 +151,17 @@ TEST(BedStress, BasinBedRoughnessReachesTheFloorAndTheQuay) {
   }
   EXPECT_EQ(rough, 2);
   for (const auto& b : load_scene(file).boundaries) EXPECT_EQ(b.roughness, 0.0) << b.name;
-  EXPECT_THROW(load_scene(file, {{"basin.bed_roughness_m", "0.0002"}, {"basin.walls", "sticky"}}), InputError);
+  EXPECT_THROW(load_scene(file, {{"basin.bed_roughness_m", "0.0002"}, {"basin.walls", "sticky"}}),
+               InputError);
   EXPECT_THROW(load_scene(file, {{"basin.bed_roughness_m", "0.2"}}), InputError);
+  // SPH has no bed stress, and says which field to change.
+  const Scene sph = load_scene(file, {{"basin.bed_roughness_m", "0.0002"}, {"solver.method", "sph"}});
+  try {
+    make_simulation(sph, {});
+    ADD_FAILURE() << "SPH took a bed roughness";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("basin.bed_roughness_m"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace
