@@ -6,15 +6,17 @@
 # measured record (3.3 ms samples), and each gauge's normalised RMS error against the record over t* < 11.2.
 #   docs/validation/gauge_ringing.sh FLUME OUT [VARIANT...]    (OUT/VARIANT is reused if it exists)
 # Variants (default: all): base (the scene as shipped: K 2e6 Pa, CFL 0.4, psi 0.9, APIC, ppc 4, dx 0.01 m),
-# K8e6, cfl0.2, cfl0.1, psi0.5, psi1, flip0.9, ppc9, ppc16, dx0.005, dx0.005_ppc9. Cost, one thread on the 2-core
-# VM: 15-60 s each at dx 0.01 m (cfl0.1: 90 s), 150 s at dx 0.005 m, 330 s with ppc 9 there.
+# K8e6, cfl0.2, cfl0.1, psi0.5, psi1, flip0.9, ppc9, ppc16, dx0.005, dx0.005_ppc9, and in 3D the same tank as a
+# strip 6 cm wide between slip walls (docs/validation/lobovsky_2014_3d_strip.json, float) at ppc 8 and 27:
+# 3d_ppc8, 3d_ppc27. Cost, one thread on the 2-core VM: 10-35 s each at dx 0.01 m, 70 s at dx 0.005 m, 130 s
+# with ppc 9 there; 3D 210 / 470 s.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/../.." && pwd)
 flume=$1
 out=$2
 shift 2
 variants=("$@")
-[ ${#variants[@]} -eq 0 ] && variants=(base K8e6 cfl0.2 cfl0.1 psi0.5 psi1 flip0.9 ppc9 ppc16 dx0.005 dx0.005_ppc9)
+[ ${#variants[@]} -eq 0 ] && variants=(base K8e6 cfl0.2 cfl0.1 psi0.5 psi1 flip0.9 ppc9 ppc16 dx0.005 dx0.005_ppc9 3d_ppc8 3d_ppc27)
 mkdir -p "$out"
 for v in "${variants[@]}"; do
   case $v in
@@ -29,11 +31,15 @@ for v in "${variants[@]}"; do
     ppc16) set_args=(--set solver.ppc=16) ;;
     dx0.005) set_args=(--set solver.dx=0.005) ;;
     dx0.005_ppc9) set_args=(--set solver.dx=0.005 --set solver.ppc=9) ;;
+    3d_ppc8) set_args=() ;;
+    3d_ppc27) set_args=(--set solver.ppc=27) ;;
     *) echo "unknown variant $v" >&2; exit 2 ;;
   esac
+  scene=$root/scenes/dam_break/lobovsky_2014_2d.json
+  [[ $v == 3d_* ]] && scene=$root/docs/validation/lobovsky_2014_3d_strip.json
   gauges=()
   for i in 0 1 2 3; do gauges+=(--set "instruments.gauges.$i.rate_hz=1000"); done
-  [ -f "$out/$v/result.h5" ] || "$flume" run "$root/scenes/dam_break/lobovsky_2014_2d.json" --out "$out/$v" \
+  [ -f "$out/$v/result.h5" ] || "$flume" run "$scene" --out "$out/$v" \
     --set solver.end_time=2 "${gauges[@]}" "${set_args[@]}" --threads 1 >"$out/$v.log" 2>&1
 done
 data=$root/tests/data/validation/lobovsky_2014
