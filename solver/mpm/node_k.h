@@ -64,7 +64,7 @@ struct GhostSearch {
 // Whether a node `depth` inside a face (m; negative: outside, in the water) is in the face's bed row, the one
 // the bed stress acts on: the first row of nodes that are not ghost nodes, from kGhostDepth - 1 to
 // kGhostDepth cells in. That is one node on every grid line across the face wherever the face lies between
-// grid lines (the quay's top at 0.255 m lies half a cell off a 0.02 m grid). It is the node on the face when
+// grid lines (the quay's top at 0.255 m lies half a cell off a 0.03 m grid). It is the node on the face when
 // the face is on a grid line; deeper nodes are ghosts, whose velocity the mirror's exchange sets
 // (mpm::ghost_half_space).
 FLUME_HD bool in_bed_row(double depth, double dx) {
